@@ -1,0 +1,1 @@
+"""Sub-commands of the seatrack CLI (one module each, exposing ``register(app)``)."""

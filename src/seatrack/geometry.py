@@ -1,0 +1,238 @@
+"""Conventions: angles, bearings, polar <-> Cartesian, local ENU <-> geodetic, units.
+
+This is the *only* module in seatrack that turns vectors into bearings. Every other
+module calls :func:`bearing` / :func:`wrap_pi` rather than writing ``atan2`` itself.
+
+Conventions (shared by all five methods, see ``specs/README.md``)
+-----------------------------------------------------------------
+* Horizontal frame: ``x`` = East, ``y`` = North, ``z`` = Up. Metres, seconds, radians.
+* Bearing, course, heading and azimuth: clockwise from North, ``atan2(dx, dy)``.
+  Wrapped to ``[0, 2*pi)`` for display (:func:`wrap_2pi`) and to ``(-pi, pi]`` for
+  differences and innovations (:func:`wrap_pi`).
+* Elevation: positive up from the horizontal plane.
+* Degrees and knots appear only at the edges (I/O, CLI, plots) through the helpers
+  at the end of this module.
+
+All functions are pure and broadcast over leading array dimensions.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+FloatArray = NDArray[np.float64]
+
+TWO_PI = 2.0 * np.pi
+KNOT_MPS = 1852.0 / 3600.0  #: one knot in metres per second (exact)
+G0 = 9.80665  #: standard gravity, m/s^2
+
+
+# ---------------------------------------------------------------------------
+# Angles
+# ---------------------------------------------------------------------------
+def wrap_pi(angle: ArrayLike) -> Any:
+    """Wrap an angle (rad) to the half-open interval ``(-pi, pi]``.
+
+    Use for every angle *difference* (innovations, residuals, heading changes).
+    """
+    a = np.asarray(angle, dtype=float)
+    w = np.mod(a + np.pi, TWO_PI) - np.pi  # [-pi, pi)
+    w = np.where(w <= -np.pi, w + TWO_PI, w)
+    return w if w.ndim else float(w)
+
+
+def wrap_2pi(angle: ArrayLike) -> Any:
+    """Wrap an angle (rad) to ``[0, 2*pi)`` (display form of bearings and courses)."""
+    a = np.asarray(angle, dtype=float)
+    w = np.mod(a, TWO_PI)
+    w = np.where(w >= TWO_PI, 0.0, w)  # guard against mod returning 2*pi by rounding
+    return w if w.ndim else float(w)
+
+
+def angle_diff(a: ArrayLike, b: ArrayLike) -> Any:
+    """Signed smallest difference ``a - b`` (rad), wrapped to ``(-pi, pi]``."""
+    return wrap_pi(np.asarray(a, dtype=float) - np.asarray(b, dtype=float))
+
+
+def bearing(dx: ArrayLike, dy: ArrayLike) -> Any:
+    """Bearing (rad, clockwise from North, ``[0, 2*pi)``) of the vector (dx East, dy North)."""
+    return wrap_2pi(np.arctan2(dx, dy))
+
+
+def bearing_between(p_from: ArrayLike, p_to: ArrayLike) -> Any:
+    """Bearing (rad) from point ``p_from`` to ``p_to``; points are ``(..., 2+)`` East, North."""
+    a = np.asarray(p_from, dtype=float)
+    b = np.asarray(p_to, dtype=float)
+    return bearing(b[..., 0] - a[..., 0], b[..., 1] - a[..., 1])
+
+
+def course_speed(vx: ArrayLike, vy: ArrayLike) -> tuple[Any, Any]:
+    """Course (rad, clockwise from North, ``[0, 2*pi)``) and speed (m/s) of a velocity."""
+    vx_a = np.asarray(vx, dtype=float)
+    vy_a = np.asarray(vy, dtype=float)
+    spd = np.hypot(vx_a, vy_a)
+    return bearing(vx_a, vy_a), (spd if spd.ndim else float(spd))
+
+
+def velocity_from_course(course: ArrayLike, speed: ArrayLike) -> FloatArray:
+    """Velocity ``(..., 2)`` (East, North; m/s) from course (rad) and speed (m/s)."""
+    c = np.asarray(course, dtype=float)
+    s = np.asarray(speed, dtype=float)
+    return np.stack([s * np.sin(c), s * np.cos(c)], axis=-1)
+
+
+# ---------------------------------------------------------------------------
+# Polar <-> Cartesian
+# ---------------------------------------------------------------------------
+def polar_to_cart(rng: ArrayLike, az: ArrayLike) -> FloatArray:
+    """2-D: range (m) and azimuth (rad, clockwise from North) to ``(..., 2)`` East, North."""
+    r = np.asarray(rng, dtype=float)
+    a = np.asarray(az, dtype=float)
+    return np.stack([r * np.sin(a), r * np.cos(a)], axis=-1)
+
+
+def cart_to_polar(xy: ArrayLike) -> tuple[Any, Any]:
+    """2-D: ``(..., 2)`` East, North to range (m) and azimuth (rad, ``[0, 2*pi)``)."""
+    p = np.asarray(xy, dtype=float)
+    r = np.hypot(p[..., 0], p[..., 1])
+    return (r if r.ndim else float(r)), bearing(p[..., 0], p[..., 1])
+
+
+def spherical_to_cart(rng: ArrayLike, az: ArrayLike, el: ArrayLike) -> FloatArray:
+    """3-D: range (m), azimuth (rad, cw from North), elevation (rad, up) to ``(..., 3)`` ENU."""
+    r = np.asarray(rng, dtype=float)
+    a = np.asarray(az, dtype=float)
+    e = np.asarray(el, dtype=float)
+    ce = np.cos(e)
+    return np.stack([r * ce * np.sin(a), r * ce * np.cos(a), r * np.sin(e)], axis=-1)
+
+
+def cart_to_spherical(xyz: ArrayLike) -> tuple[Any, Any, Any]:
+    """3-D: ``(..., 3)`` ENU to range (m), azimuth (rad, ``[0, 2*pi)``), elevation (rad)."""
+    p = np.asarray(xyz, dtype=float)
+    rh = np.hypot(p[..., 0], p[..., 1])
+    r = np.hypot(rh, p[..., 2])
+    el = np.arctan2(p[..., 2], rh)
+    return (
+        (r if r.ndim else float(r)),
+        bearing(p[..., 0], p[..., 1]),
+        (el if el.ndim else float(el)),
+    )
+
+
+def rotation_to_beam(psi: ArrayLike) -> FloatArray:
+    """Rotation matrix ``(..., 2, 2)`` from (East, North) to the beam frame of bearing ``psi``.
+
+    The beam frame has its first axis (xi) along the beam (bearing ``psi``) and its
+    second axis (eta) across it, to the right (clockwise) of the beam:
+    ``[xi, eta] = R @ [E, N]``. ``R`` is orthogonal, so ``R.T`` rotates back.
+    """
+    p = np.asarray(psi, dtype=float)
+    s, c = np.sin(p), np.cos(p)
+    return np.stack([np.stack([s, c], -1), np.stack([c, -s], -1)], -2)
+
+
+# ---------------------------------------------------------------------------
+# Geodesy: local East-North-Up <-> geodetic (WGS84) through pyproj
+# ---------------------------------------------------------------------------
+@lru_cache(maxsize=8)
+def _transformers() -> tuple[Any, Any]:
+    from pyproj import Transformer
+
+    # geodetic (lon, lat, h) <-> ECEF, exact ellipsoidal maths from PROJ
+    fwd = Transformer.from_crs("EPSG:4979", "EPSG:4978", always_xy=True)
+    inv = Transformer.from_crs("EPSG:4978", "EPSG:4979", always_xy=True)
+    return fwd, inv
+
+
+def _enu_rotation(lat0: float, lon0: float) -> FloatArray:
+    sl, cl = np.sin(np.radians(lat0)), np.cos(np.radians(lat0))
+    so, co = np.sin(np.radians(lon0)), np.cos(np.radians(lon0))
+    # rows: East, North, Up unit vectors in ECEF
+    return np.array(
+        [
+            [-so, co, 0.0],
+            [-sl * co, -sl * so, cl],
+            [cl * co, cl * so, sl],
+        ]
+    )
+
+
+def geodetic_to_enu(
+    lat_deg: ArrayLike,
+    lon_deg: ArrayLike,
+    h_m: ArrayLike,
+    lat0_deg: float,
+    lon0_deg: float,
+    h0_m: float = 0.0,
+) -> FloatArray:
+    """WGS84 geodetic (deg, deg, m) to local East-North-Up (m) about an origin.
+
+    Exact (no flat-earth approximation): geodetic -> ECEF via PROJ, then the rotation to
+    the local tangent plane at ``(lat0, lon0, h0)``. Returns ``(..., 3)``.
+    """
+    fwd, _ = _transformers()
+    lat = np.asarray(lat_deg, dtype=float)
+    lon = np.asarray(lon_deg, dtype=float)
+    h = np.broadcast_to(np.asarray(h_m, dtype=float), np.broadcast_shapes(lat.shape, lon.shape))
+    lat, lon = np.broadcast_arrays(lat, lon)
+    X, Y, Z = fwd.transform(lon, lat, h)
+    X0, Y0, Z0 = fwd.transform(lon0_deg, lat0_deg, h0_m)
+    d = np.stack([np.asarray(X) - X0, np.asarray(Y) - Y0, np.asarray(Z) - Z0], axis=-1)
+    return d @ _enu_rotation(lat0_deg, lon0_deg).T
+
+
+def enu_to_geodetic(
+    enu: ArrayLike, lat0_deg: float, lon0_deg: float, h0_m: float = 0.0
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Local East-North-Up ``(..., 3)`` (or ``(..., 2)``, Up = 0) to WGS84 (lat, lon, h).
+
+    Inverse of :func:`geodetic_to_enu`; returns degrees, degrees, metres.
+    """
+    fwd, inv = _transformers()
+    e = np.asarray(enu, dtype=float)
+    if e.shape[-1] == 2:
+        e = np.concatenate([e, np.zeros(e.shape[:-1] + (1,))], axis=-1)
+    X0, Y0, Z0 = fwd.transform(lon0_deg, lat0_deg, h0_m)
+    d = e @ _enu_rotation(lat0_deg, lon0_deg)
+    lon, lat, h = inv.transform(d[..., 0] + X0, d[..., 1] + Y0, d[..., 2] + Z0)
+    return np.asarray(lat, float), np.asarray(lon, float), np.asarray(h, float)
+
+
+# ---------------------------------------------------------------------------
+# Units at the edges
+# ---------------------------------------------------------------------------
+def deg2rad(deg: ArrayLike) -> Any:
+    """Degrees to radians."""
+    return np.radians(deg)
+
+
+def rad2deg(rad: ArrayLike) -> Any:
+    """Radians to degrees."""
+    return np.degrees(rad)
+
+
+def bearing_deg_to_rad(deg: ArrayLike) -> Any:
+    """Bearing in degrees (any range) to radians in ``[0, 2*pi)``."""
+    return wrap_2pi(np.radians(deg))
+
+
+def bearing_rad_to_deg(rad: ArrayLike) -> Any:
+    """Bearing in radians to degrees in ``[0, 360)``."""
+    d = np.mod(np.degrees(rad), 360.0)
+    d = np.where(d >= 360.0, 0.0, d)
+    return d if np.ndim(d) else float(d)
+
+
+def knots_to_mps(kn: ArrayLike) -> Any:
+    """Knots to metres per second."""
+    return np.asarray(kn, dtype=float) * KNOT_MPS
+
+
+def mps_to_knots(mps: ArrayLike) -> Any:
+    """Metres per second to knots."""
+    return np.asarray(mps, dtype=float) / KNOT_MPS

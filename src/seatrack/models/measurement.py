@@ -1,0 +1,298 @@
+"""Measurement models: ``h(x)`` and analytic Jacobians.
+
+Pure functions on the *relative* geometry (target minus sensor) come first; small model
+objects then map them onto a state vector (which components are position / velocity)
+and say which measurement components are angles (``angular``) so the Kalman core wraps
+their innovations.
+
+Conventions: azimuth / bearing clockwise from North (``atan2(dx, dy)``), elevation up
+from the horizontal; range rate positive when the range opens (receding target).
+The predicted angles are returned wrapped to ``[0, 2*pi)``; innovations are wrapped to
+``(-pi, pi]`` by :func:`seatrack.kalman.extended_update`.
+
+Every Jacobian is checked against :func:`seatrack.models.numdiff.numerical_jacobian`
+in ``tests/models/test_measurement.py``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from seatrack.geometry import bearing as _bearing
+
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "MeasurementModel",
+    "Bearing",
+    "RangeBearing",
+    "RangeBearingElevation",
+    "RangeRate",
+    "Position",
+    "Stacked",
+    "bearing_jacobian",
+    "range_bearing_jacobian",
+    "range_bearing_elevation_jacobian",
+    "range_rate",
+    "range_rate_jacobian",
+]
+
+
+# ---------------------------------------------------------------------------
+# Pure functions of the relative vector d = target - sensor
+# ---------------------------------------------------------------------------
+def bearing_jacobian(d: ArrayLike) -> FloatArray:
+    """d(bearing)/d(target x, y) = ``[dy, -dx] / r^2`` (rad/m), shape ``(..., 2)``."""
+    dd = np.asarray(d, dtype=float)
+    r2 = dd[..., 0] ** 2 + dd[..., 1] ** 2
+    return np.stack([dd[..., 1] / r2, -dd[..., 0] / r2], -1)
+
+
+def range_bearing_jacobian(d: ArrayLike) -> FloatArray:
+    """Jacobian of ``[range, bearing]`` w.r.t. target ``(x, y)``, shape ``(..., 2, 2)``."""
+    dd = np.asarray(d, dtype=float)
+    r = np.hypot(dd[..., 0], dd[..., 1])
+    row_r = np.stack([dd[..., 0] / r, dd[..., 1] / r], -1)
+    return np.stack([row_r, bearing_jacobian(dd)], -2)
+
+
+def range_bearing_elevation_jacobian(d: ArrayLike) -> FloatArray:
+    """Jacobian of ``[range, azimuth, elevation]`` w.r.t. target ``(x, y, z)``, ``(..., 3, 3)``."""
+    dd = np.asarray(d, dtype=float)
+    x, y, z = dd[..., 0], dd[..., 1], dd[..., 2]
+    rh2 = x**2 + y**2
+    rh = np.sqrt(rh2)
+    r2 = rh2 + z**2
+    r = np.sqrt(r2)
+    zero = np.zeros_like(x)
+    row_r = np.stack([x / r, y / r, z / r], -1)
+    row_a = np.stack([y / rh2, -x / rh2, zero], -1)
+    row_e = np.stack([-x * z / (r2 * rh), -y * z / (r2 * rh), rh / r2], -1)
+    return np.stack([row_r, row_a, row_e], -2)
+
+
+def range_rate(d: ArrayLike, dv: ArrayLike) -> Any:
+    """Range rate ``d . dv / |d|`` (m/s; positive = opening) for relative position/velocity."""
+    dd = np.asarray(d, dtype=float)
+    vv = np.asarray(dv, dtype=float)
+    r = np.linalg.norm(dd, axis=-1)
+    return np.einsum("...i,...i->...", dd, vv) / r
+
+
+def range_rate_jacobian(d: ArrayLike, dv: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Jacobian of the range rate w.r.t. relative position and velocity.
+
+    ``d(rdot)/dp = (dv - rdot d / r) / r``, ``d(rdot)/dv = d / r`` (multimodel spec step 3).
+    """
+    dd = np.asarray(d, dtype=float)
+    vv = np.asarray(dv, dtype=float)
+    r = np.linalg.norm(dd, axis=-1)[..., None]
+    rd = np.einsum("...i,...i->...", dd, vv)[..., None] / r
+    return (vv - rd * dd / r) / r, dd / r
+
+
+# ---------------------------------------------------------------------------
+# Model objects
+# ---------------------------------------------------------------------------
+class MeasurementModel(Protocol):
+    """What filters need from a measurement model."""
+
+    @property
+    def angular(self) -> NDArray[np.bool_]: ...
+
+    @property
+    def ndim_meas(self) -> int: ...
+
+    def h(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray: ...
+
+    def jacobian(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray: ...
+
+
+def _rel(x: ArrayLike, idx: tuple[int, ...], sensor: ArrayLike | None) -> FloatArray:
+    p = np.asarray(x, dtype=float)[..., list(idx)]
+    if sensor is None:
+        return p
+    s = np.asarray(sensor, dtype=float)[..., : len(idx)]
+    return p - s
+
+
+def _embed(block: FloatArray, idx: tuple[int, ...], n: int, lead: tuple[int, ...]) -> FloatArray:
+    H = np.zeros(lead + (block.shape[-2], n))
+    H[..., list(idx)] = block
+    return H
+
+
+@dataclass(frozen=True)
+class Bearing:
+    """Passive bearing (2-D). ``h(x) = [atan2(dx, dy)]``.
+
+    Parameters
+    ----------
+    n : int
+        State dimension.
+    pos : tuple of int
+        Indices of target (x, y) in the state.
+    """
+
+    n: int = 4
+    pos: tuple[int, ...] = (0, 1)
+    ndim_meas: int = field(default=1, init=False)
+
+    @property
+    def angular(self) -> NDArray[np.bool_]:
+        return np.array([True])
+
+    def h(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
+        d = _rel(x, self.pos, sensor)
+        return np.asarray(_bearing(d[..., 0], d[..., 1]))[..., None]
+
+    def jacobian(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
+        d = _rel(x, self.pos, sensor)
+        return _embed(bearing_jacobian(d)[..., None, :], self.pos, self.n, d.shape[:-1])
+
+
+@dataclass(frozen=True)
+class RangeBearing:
+    """Active sonar / 2-D radar: ``h(x) = [range, bearing]``."""
+
+    n: int = 4
+    pos: tuple[int, ...] = (0, 1)
+    ndim_meas: int = field(default=2, init=False)
+
+    @property
+    def angular(self) -> NDArray[np.bool_]:
+        return np.array([False, True])
+
+    def h(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
+        d = _rel(x, self.pos, sensor)
+        return np.stack([np.hypot(d[..., 0], d[..., 1]), _bearing(d[..., 0], d[..., 1])], -1)
+
+    def jacobian(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
+        d = _rel(x, self.pos, sensor)
+        return _embed(range_bearing_jacobian(d), self.pos, self.n, d.shape[:-1])
+
+
+@dataclass(frozen=True)
+class RangeBearingElevation:
+    """3-D radar: ``h(x) = [range, azimuth, elevation]``."""
+
+    n: int = 6
+    pos: tuple[int, ...] = (0, 1, 2)
+    ndim_meas: int = field(default=3, init=False)
+
+    @property
+    def angular(self) -> NDArray[np.bool_]:
+        return np.array([False, True, True])
+
+    def h(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
+        d = _rel(x, self.pos, sensor)
+        rh = np.hypot(d[..., 0], d[..., 1])
+        return np.stack(
+            [np.hypot(rh, d[..., 2]), _bearing(d[..., 0], d[..., 1]), np.arctan2(d[..., 2], rh)],
+            -1,
+        )
+
+    def jacobian(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
+        d = _rel(x, self.pos, sensor)
+        return _embed(range_bearing_elevation_jacobian(d), self.pos, self.n, d.shape[:-1])
+
+
+@dataclass(frozen=True)
+class RangeRate:
+    """Doppler range rate ``h(x) = [(p - s) . (v - vs) / |p - s|]`` (2-D or 3-D).
+
+    ``sensor`` may carry the sensor velocity after its position:
+    ``[sx, sy, (sz), svx, svy, (svz)]``; without it the sensor is at rest.
+    """
+
+    n: int = 6
+    pos: tuple[int, ...] = (0, 1, 2)
+    vel: tuple[int, ...] = (3, 4, 5)
+    ndim_meas: int = field(default=1, init=False)
+
+    @property
+    def angular(self) -> NDArray[np.bool_]:
+        return np.array([False])
+
+    def _rel(self, x: ArrayLike, sensor: ArrayLike | None) -> tuple[FloatArray, FloatArray]:
+        xx = np.asarray(x, dtype=float)
+        p = xx[..., list(self.pos)]
+        v = xx[..., list(self.vel)]
+        if sensor is not None:
+            s = np.asarray(sensor, dtype=float)
+            k = len(self.pos)
+            p = p - s[..., :k]
+            if s.shape[-1] >= 2 * k:
+                v = v - s[..., k : 2 * k]
+        return p, v
+
+    def h(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
+        p, v = self._rel(x, sensor)
+        return np.asarray(range_rate(p, v))[..., None]
+
+    def jacobian(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
+        p, v = self._rel(x, sensor)
+        jp, jv = range_rate_jacobian(p, v)
+        H = np.zeros(p.shape[:-1] + (1, self.n))
+        H[..., 0, list(self.pos)] = jp
+        H[..., 0, list(self.vel)] = jv
+        return H
+
+
+@dataclass(frozen=True)
+class Position:
+    """Linear (converted) position measurement ``h(x) = x[pos]``."""
+
+    n: int = 4
+    pos: tuple[int, ...] = (0, 1)
+
+    @property
+    def ndim_meas(self) -> int:
+        return len(self.pos)
+
+    @property
+    def angular(self) -> NDArray[np.bool_]:
+        return np.zeros(len(self.pos), bool)
+
+    def matrix(self) -> FloatArray:
+        """The constant ``H`` matrix ``(len(pos), n)``."""
+        H = np.zeros((len(self.pos), self.n))
+        H[range(len(self.pos)), list(self.pos)] = 1.0
+        return H
+
+    def h(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
+        return _rel(x, self.pos, sensor)
+
+    def jacobian(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
+        lead = np.asarray(x).shape[:-1]
+        return np.broadcast_to(self.matrix(), lead + (len(self.pos), self.n)).copy()
+
+
+@dataclass(frozen=True)
+class Stacked:
+    """Several measurement models observed together (e.g. range-azimuth-elevation + range rate).
+
+    ``h`` and the Jacobian are the concatenations of the parts; the same ``sensor``
+    argument is passed to each.
+    """
+
+    parts: Sequence[Any]
+
+    @property
+    def ndim_meas(self) -> int:
+        return int(sum(p.ndim_meas for p in self.parts))
+
+    @property
+    def angular(self) -> NDArray[np.bool_]:
+        return np.concatenate([p.angular for p in self.parts])
+
+    def h(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
+        return np.concatenate([p.h(x, sensor) for p in self.parts], -1)
+
+    def jacobian(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
+        return np.concatenate([p.jacobian(x, sensor) for p in self.parts], -2)

@@ -1,0 +1,329 @@
+"""Motion models: transition matrices / functions, analytic Jacobians, process noise.
+
+State layouts (1-D vectors, positions first, then velocities, then the rest):
+
+* constant velocity (CV), ``d`` = 2 or 3 spatial dimensions: ``[x, y, (z), vx, vy, (vz)]``
+* constant acceleration (CA): ``[x, y, (z), vx, vy, (vz), ax, ay, (az)]``
+* coordinated turn (CT), 2-D: ``[x, y, vx, vy, omega]``; 3-D: ``[x, y, z, vx, vy, vz, omega]``
+  (the vertical channel is CV). ``omega`` is the rate of change of course, rad/s,
+  **positive clockwise** (to starboard), matching bearings clockwise from North:
+  ``d(vx)/dt = omega * vy``, ``d(vy)/dt = -omega * vx``.
+
+x East, y North, z Up; SI units. All functions broadcast over leading dimensions of
+``x`` and ``dt`` where stated.
+
+References
+----------
+Bar-Shalom, Li & Kirubarajan (2001), sections 6.2 (white-noise acceleration models),
+6.3 (CA), 11.7 (coordinated turn).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "MotionModel",
+    "ConstantVelocity",
+    "ConstantAcceleration",
+    "CoordinatedTurn",
+    "cv_transition",
+    "cv_noise",
+    "cv_noise_discrete",
+    "ca_transition",
+    "ca_noise",
+    "ct_transition",
+    "ct_jacobian",
+    "ct_noise",
+]
+
+
+def _kron_blocks(blocks: FloatArray, d: int) -> FloatArray:
+    """Expand per-axis ``(..., k, k)`` blocks into ``(..., k*d, k*d)`` (block order)."""
+    eye = np.eye(d)
+    return np.einsum("...ij,ab->...iajb", blocks, eye).reshape(
+        blocks.shape[:-2] + (blocks.shape[-2] * d, blocks.shape[-1] * d)
+    )
+
+
+def _poly_transition(dt: ArrayLike, order: int, d: int) -> FloatArray:
+    t = np.asarray(dt, dtype=float)[..., None, None]
+    k = order + 1
+    blk = np.zeros(t.shape[:-2] + (k, k))
+    fact = 1.0
+    for p in range(k):
+        if p:
+            fact *= p
+        for i in range(k - p):
+            blk[..., i, i + p] = (t[..., 0, 0] ** p) / fact
+    return _kron_blocks(blk, d)
+
+
+def cv_transition(dt: ArrayLike, d: int = 2) -> FloatArray:
+    """Constant-velocity transition ``F = [[I, dt I], [0, I]]``, shape ``(..., 2d, 2d)``."""
+    return _poly_transition(dt, 1, d)
+
+
+def cv_noise(dt: ArrayLike, q: ArrayLike, d: int = 2) -> FloatArray:
+    """Continuous white-noise-acceleration process noise for CV (BLK 6.2.2).
+
+    ``Q = q [[dt^3/3 I, dt^2/2 I], [dt^2/2 I, dt I]]`` with ``q`` the power spectral
+    density of the acceleration, m^2/s^3. Shape ``(..., 2d, 2d)``.
+    """
+    t = np.asarray(dt, dtype=float)
+    qq = np.asarray(q, dtype=float)
+    blk = np.stack(
+        [np.stack([t**3 / 3, t**2 / 2], -1), np.stack([t**2 / 2, t], -1)], -2
+    ) * qq[..., None, None]
+    return _kron_blocks(blk, d)
+
+
+def cv_noise_discrete(dt: ArrayLike, sigma_a: ArrayLike, d: int = 2) -> FloatArray:
+    """Piecewise-constant (discrete) white-noise acceleration for CV (BLK 6.3.2).
+
+    ``Q = sigma_a^2 G G^T`` with ``G = [dt^2/2, dt]`` per axis; ``sigma_a`` in m/s^2.
+    """
+    t = np.asarray(dt, dtype=float)
+    s2 = np.asarray(sigma_a, dtype=float) ** 2
+    g = np.stack([t**2 / 2, t], -1)
+    blk = g[..., :, None] * g[..., None, :] * s2[..., None, None]
+    return _kron_blocks(blk, d)
+
+
+def ca_transition(dt: ArrayLike, d: int = 2) -> FloatArray:
+    """Constant-acceleration transition, state ``[p, v, a]`` per block, ``(..., 3d, 3d)``."""
+    return _poly_transition(dt, 2, d)
+
+
+def ca_noise(dt: ArrayLike, q: ArrayLike, d: int = 2) -> FloatArray:
+    """Continuous white-noise-jerk process noise for CA (BLK 6.2.3); ``q`` in m^2/s^5."""
+    t = np.asarray(dt, dtype=float)
+    qq = np.asarray(q, dtype=float)
+    rows = [
+        [t**5 / 20, t**4 / 8, t**3 / 6],
+        [t**4 / 8, t**3 / 3, t**2 / 2],
+        [t**3 / 6, t**2 / 2, t],
+    ]
+    blk = np.stack([np.stack(r, -1) for r in rows], -2) * qq[..., None, None]
+    return _kron_blocks(blk, d)
+
+
+# ---------------------------------------------------------------------------
+# Coordinated turn
+# ---------------------------------------------------------------------------
+_SMALL = 1e-3  # |w T| below which the Taylor series is used (error < 1e-16 T)
+
+
+def _ct_coeffs(w: FloatArray, t: FloatArray) -> tuple[FloatArray, ...]:
+    """a = sin(wT)/w, b = (1-cos(wT))/w and their derivatives in w (series near 0)."""
+    wt = w * t
+    small = np.abs(wt) < _SMALL
+    ws = np.where(small, 1.0, w)
+    s, c = np.sin(wt), np.cos(wt)
+    a = np.where(small, t - w**2 * t**3 / 6 + w**4 * t**5 / 120, s / ws)
+    b = np.where(small, w * t**2 / 2 - w**3 * t**4 / 24, (1 - c) / ws)
+    da = np.where(small, -w * t**3 / 3 + w**3 * t**5 / 30, t * c / ws - s / ws**2)
+    db = np.where(
+        small, t**2 / 2 - w**2 * t**4 / 8 + w**4 * t**6 / 144, t * s / ws - (1 - c) / ws**2
+    )
+    return a, b, da, db, s, c
+
+
+def _ct_index(n: int) -> tuple[int, int, int, int, int, int | None]:
+    if n == 5:
+        return 0, 1, 2, 3, 4, None
+    if n == 7:
+        return 0, 1, 3, 4, 6, 2
+    raise ValueError(f"coordinated-turn state must have 5 (2-D) or 7 (3-D) components, got {n}")
+
+
+def ct_transition(x: ArrayLike, dt: ArrayLike) -> FloatArray:
+    """Exact coordinated-turn propagation ``f(x)`` (clockwise-positive turn rate).
+
+    ``vx' = vx cos(wT) + vy sin(wT)``, ``vy' = -vx sin(wT) + vy cos(wT)``;
+    positions integrate the rotating velocity exactly. Near ``w = 0`` a series is used.
+    """
+    xx = np.asarray(x, dtype=float)
+    ix, iy, ivx, ivy, iw, iz = _ct_index(xx.shape[-1])
+    t = np.asarray(dt, dtype=float)
+    w = xx[..., iw]
+    vx, vy = xx[..., ivx], xx[..., ivy]
+    a, b, _, _, s, c = _ct_coeffs(w, t)
+    out = np.array(np.broadcast_to(xx, np.broadcast_shapes(xx.shape, t.shape + (1,))))
+    out[..., ix] = xx[..., ix] + a * vx + b * vy
+    out[..., iy] = xx[..., iy] - b * vx + a * vy
+    out[..., ivx] = c * vx + s * vy
+    out[..., ivy] = -s * vx + c * vy
+    if iz is not None:
+        out[..., iz] = xx[..., iz] + t * xx[..., 5]
+    return out
+
+
+def ct_jacobian(x: ArrayLike, dt: ArrayLike) -> FloatArray:
+    """Analytic Jacobian ``df/dx`` of :func:`ct_transition`, shape ``(..., n, n)``."""
+    xx = np.asarray(x, dtype=float)
+    n = xx.shape[-1]
+    ix, iy, ivx, ivy, iw, iz = _ct_index(n)
+    t = np.asarray(dt, dtype=float)
+    w = xx[..., iw]
+    vx, vy = xx[..., ivx], xx[..., ivy]
+    a, b, da, db, s, c = _ct_coeffs(w, t)
+    shape = np.broadcast_shapes(xx.shape[:-1], t.shape)
+    J = np.zeros(shape + (n, n))
+    J[..., range(n), range(n)] = 1.0
+    J[..., ix, ivx] = a
+    J[..., ix, ivy] = b
+    J[..., ix, iw] = da * vx + db * vy
+    J[..., iy, ivx] = -b
+    J[..., iy, ivy] = a
+    J[..., iy, iw] = -db * vx + da * vy
+    J[..., ivx, ivx] = c
+    J[..., ivx, ivy] = s
+    J[..., ivx, iw] = t * (-s * vx + c * vy)
+    J[..., ivy, ivx] = -s
+    J[..., ivy, ivy] = c
+    J[..., ivy, iw] = t * (-c * vx - s * vy)
+    if iz is not None:
+        J[..., iz, 5] = t
+    return J
+
+
+def ct_noise(dt: ArrayLike, q: ArrayLike, q_omega: ArrayLike, d: int = 2) -> FloatArray:
+    """Coordinated-turn process noise: CV white-noise acceleration ``q`` (m^2/s^3) on the
+    kinematic part and a random walk ``q_omega * dt`` (rad^2/s^3 * s) on the turn rate."""
+    t = np.asarray(dt, dtype=float)
+    Qcv = cv_noise(t, q, d)
+    n = 2 * d + 1
+    Q = np.zeros(Qcv.shape[:-2] + (n, n))
+    Q[..., : 2 * d, : 2 * d] = Qcv
+    Q[..., -1, -1] = np.asarray(q_omega, dtype=float) * t
+    return Q
+
+
+# ---------------------------------------------------------------------------
+# Model objects (configuration in the constructor, data in the call)
+# ---------------------------------------------------------------------------
+class MotionModel(Protocol):
+    """What filters need from a motion model."""
+
+    @property
+    def ndim_state(self) -> int: ...
+
+    @property
+    def position_index(self) -> tuple[int, ...]: ...
+
+    @property
+    def velocity_index(self) -> tuple[int, ...]: ...
+
+    def transition(self, x: ArrayLike, dt: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Return ``(f(x), F)``: the propagated state and the transition Jacobian."""
+        ...
+
+    def noise(self, dt: ArrayLike) -> FloatArray:
+        """Process-noise covariance ``Q(dt)``."""
+        ...
+
+
+@dataclass(frozen=True)
+class ConstantVelocity:
+    """Constant-velocity model with continuous white-noise acceleration.
+
+    Parameters
+    ----------
+    q : float
+        Acceleration power spectral density, m^2/s^3 (``q = sigma_a^2 * tau`` roughly).
+    d : int
+        Spatial dimensions (2 or 3).
+    """
+
+    q: float = 0.1
+    d: int = 2
+
+    @property
+    def ndim_state(self) -> int:
+        return 2 * self.d
+
+    @property
+    def position_index(self) -> tuple[int, ...]:
+        return tuple(range(self.d))
+
+    @property
+    def velocity_index(self) -> tuple[int, ...]:
+        return tuple(range(self.d, 2 * self.d))
+
+    def transition(self, x: ArrayLike, dt: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        F = cv_transition(dt, self.d)
+        return np.einsum("...ij,...j->...i", F, np.asarray(x, float)), F
+
+    def noise(self, dt: ArrayLike) -> FloatArray:
+        return cv_noise(dt, self.q, self.d)
+
+
+@dataclass(frozen=True)
+class ConstantAcceleration:
+    """Constant-acceleration model with white-noise jerk ``q`` (m^2/s^5)."""
+
+    q: float = 0.01
+    d: int = 2
+
+    @property
+    def ndim_state(self) -> int:
+        return 3 * self.d
+
+    @property
+    def position_index(self) -> tuple[int, ...]:
+        return tuple(range(self.d))
+
+    @property
+    def velocity_index(self) -> tuple[int, ...]:
+        return tuple(range(self.d, 2 * self.d))
+
+    def transition(self, x: ArrayLike, dt: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        F = ca_transition(dt, self.d)
+        return np.einsum("...ij,...j->...i", F, np.asarray(x, float)), F
+
+    def noise(self, dt: ArrayLike) -> FloatArray:
+        return ca_noise(dt, self.q, self.d)
+
+
+@dataclass(frozen=True)
+class CoordinatedTurn:
+    """Coordinated turn with the turn rate in the state (clockwise positive).
+
+    Parameters
+    ----------
+    q : float
+        Acceleration PSD on the kinematic part, m^2/s^3.
+    q_omega : float
+        Turn-rate random-walk PSD, rad^2/s^3.
+    d : int
+        2 (state ``[x, y, vx, vy, w]``) or 3 (``[x, y, z, vx, vy, vz, w]``).
+    """
+
+    q: float = 0.1
+    q_omega: float = 1e-4
+    d: int = 2
+
+    @property
+    def ndim_state(self) -> int:
+        return 2 * self.d + 1
+
+    @property
+    def position_index(self) -> tuple[int, ...]:
+        return tuple(range(self.d))
+
+    @property
+    def velocity_index(self) -> tuple[int, ...]:
+        return tuple(range(self.d, 2 * self.d))
+
+    def transition(self, x: ArrayLike, dt: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        return ct_transition(x, dt), ct_jacobian(x, dt)
+
+    def noise(self, dt: ArrayLike) -> FloatArray:
+        return ct_noise(dt, self.q, self.q_omega, self.d)

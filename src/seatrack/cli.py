@@ -39,6 +39,11 @@ app = typer.Typer(
 )
 
 
+@app.callback()
+def _root() -> None:
+    """Maritime and radar target tracking and navigation."""
+
+
 def _register() -> None:
     for name in COMMAND_MODULES:
         try:

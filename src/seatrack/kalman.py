@@ -126,8 +126,24 @@ def _update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
     """Joseph-form update given the innovation ``y``; returns (nis, loglik)."""
     n = x.shape[0]
     m = y.shape[0]
+    # one scratch allocation for every temporary (views below): allocations dominate
+    # the cost of small updates in batch mode
+    buf = np.empty(2 * n * m + m * m + 2 * m + 2 * n * n + n * m)
+    o = 0
+    PHt = buf[o : o + n * m].reshape((n, m))
+    o += n * m
+    L = buf[o : o + m * m].reshape((m, m))
+    o += m * m
+    w = buf[o : o + m]
+    o += m
+    t = buf[o : o + m]
+    o += m
+    A = buf[o : o + n * n].reshape((n, n))
+    o += n * n
+    AP = buf[o : o + n * n].reshape((n, n))
+    o += n * n
+    KR = buf[o : o + n * m].reshape((n, m))
     # PHt = P H^T  (n, m)
-    PHt = np.empty((n, m))
     for i in range(n):
         for j in range(m):
             s = 0.0
@@ -144,7 +160,7 @@ def _update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
             So[i, j] = v
             So[j, i] = v
     # Cholesky S = L L^T
-    L = np.zeros((m, m))
+    L[:, :] = 0.0
     logdet = 0.0
     for j in range(m):
         d = So[j, j]
@@ -163,7 +179,6 @@ def _update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
                 s -= L[i, k] * L[j, k]
             L[i, j] = s / d
     # w = L^-1 y ; nis = w.w
-    w = np.empty(m)
     for i in range(m):
         s = y[i]
         for k in range(i):
@@ -174,7 +189,6 @@ def _update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
         nis += w[i] * w[i]
     # K = PHt S^-1: solve L L^T K^T = PHt^T row by row of PHt
     for r in range(n):
-        t = np.empty(m)
         for i in range(m):
             s = PHt[r, i]
             for k in range(i):
@@ -192,21 +206,18 @@ def _update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
             s += Ko[i, k] * y[k]
         xo[i] = s
     # Joseph form: A = I - K H ; P+ = A P A^T + K R K^T
-    A = np.empty((n, n))
     for i in range(n):
         for j in range(n):
             s = 0.0
             for k in range(m):
                 s += Ko[i, k] * H[k, j]
             A[i, j] = (1.0 if i == j else 0.0) - s
-    AP = np.empty((n, n))
     for i in range(n):
         for j in range(n):
             s = 0.0
             for k in range(n):
                 s += A[i, k] * P[k, j]
             AP[i, j] = s
-    KR = np.empty((n, m))
     for i in range(n):
         for j in range(m):
             s = 0.0
@@ -373,7 +384,9 @@ def _f(a: ArrayLike) -> FloatArray:
     return np.asarray(a, dtype=np.float64)
 
 
-def predict(x: ArrayLike, P: ArrayLike, F: ArrayLike, Q: ArrayLike) -> tuple[FloatArray, FloatArray]:
+def predict(
+    x: ArrayLike, P: ArrayLike, F: ArrayLike, Q: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
     """Kalman prediction ``x <- F x``, ``P <- F P F^T + Q``.
 
     Parameters
@@ -393,7 +406,7 @@ def predict(x: ArrayLike, P: ArrayLike, F: ArrayLike, Q: ArrayLike) -> tuple[Flo
     """
     if _is_single(7, x, P, F, Q):
         # outputs allocated here: boxing arrays created inside compiled code costs more
-        n = x.shape[0]
+        n = x.shape[0]  # type: ignore[union-attr]
         xo, Po = np.empty(n), np.empty((n, n))
         _predict_core(x, P, F, Q, xo, Po)
         return xo, Po
@@ -434,7 +447,7 @@ def update(x: ArrayLike, P: ArrayLike, z: ArrayLike, H: ArrayLike, R: ArrayLike)
         If the innovation covariance is not positive definite.
     """
     if _is_single(8, x, P, z, H, R):
-        xo, Po, y, S, K = _outputs(x.shape[0], z.shape[0])
+        xo, Po, y, S, K = _outputs(x.shape[0], z.shape[0])  # type: ignore[union-attr]
         nis, ll = _linear_update_single(x, P, z, H, R, xo, Po, y, S, K)
     else:
         xo, Po, y, S, nis, ll, K = _linear_update_kernel(x, P, z, H, R)
@@ -473,11 +486,9 @@ def extended_update(
     UpdateResult
     """
     zz = _f(z)
-    ang = (
-        np.zeros(zz.shape[-1]) if angular is None else np.asarray(angular, dtype=np.float64)
-    )
+    ang = np.zeros(zz.shape[-1]) if angular is None else np.asarray(angular, dtype=np.float64)
     if _is_single(9, x, P, zz, hx, H, R):
-        xo, Po, y, S, K = _outputs(x.shape[0], zz.shape[0])
+        xo, Po, y, S, K = _outputs(x.shape[0], zz.shape[0])  # type: ignore[union-attr]
         nis, ll = _extended_update_single(x, P, zz, hx, H, R, ang, xo, Po, y, S, K)
     else:
         xo, Po, y, S, nis, ll, K = _update_kernel(x, P, zz, hx, H, R, ang)

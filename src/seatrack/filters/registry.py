@@ -18,6 +18,51 @@ import numpy as np
 #: method name -> (module, function, one-line description)
 METHODS: dict[str, tuple[str, str, str]] = {
     "ekf": ("seatrack.filters.ekf", "track_plots", "constant-velocity EKF on polar plots"),
+    "robust": (
+        "seatrack.filters.robust",
+        "track_plots_robust",
+        "Ramazanov robust beam-frame filter (algorithm R), 2-D range/bearing",
+    ),
+    "robust-adaptive": (
+        "seatrack.filters.robust",
+        "track_plots_robust_adaptive",
+        "Ramazanov adaptive-robust beam-frame filter (algorithm A), 2-D range/bearing",
+    ),
+    "huber": (
+        "seatrack.filters.robust_baselines",
+        "track_plots_huber",
+        "Huber M-estimation EKF (IRLS), 2-D range/bearing",
+    ),
+    "student-t": (
+        "seatrack.filters.robust_baselines",
+        "track_plots_student_t",
+        "variational-Bayes Student-t EKF, 2-D range/bearing",
+    ),
+    "ekf-rb": (
+        "seatrack.filters.robust_baselines",
+        "track_plots_ekf",
+        "2-D range/bearing CV EKF with outlier diagnostics (baseline of robust)",
+    ),
+    "turning": (
+        "seatrack.filters.turning",
+        "track_plots",
+        "turning-target CV-EKF, Q raised by a fuzzy turn-rate vote (CN 104407337)",
+    ),
+    "mm-rangerate": (
+        "seatrack.filters.multimodel",
+        "track_plots_rangerate",
+        "multiple-model filter, reliabilities from position and range rate (JP H06-95138)",
+    ),
+    "mm": (
+        "seatrack.filters.multimodel",
+        "track_plots_position",
+        "multiple-model filter, position-only reliabilities (Gholson & Moose prior art)",
+    ),
+    "imm": (
+        "seatrack.filters.multimodel",
+        "track_plots_imm",
+        "standard IMM, CV + coordinated turn",
+    ),
 }
 
 COMMON_COLUMNS = (

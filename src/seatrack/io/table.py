@@ -210,4 +210,4 @@ def check_times(
 
 
 def _grp(group: str | None, key: str) -> str:
-    return f" for {group} {key!r}" if group and key != "" else ""
+    return f" for {group} {str(key)!r}" if group and key != "" else ""

@@ -21,7 +21,7 @@ Bar-Shalom, Li & Kirubarajan (2001), sections 6.2 (white-noise acceleration mode
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -78,9 +78,10 @@ def cv_noise(dt: ArrayLike, q: ArrayLike, d: int = 2) -> FloatArray:
     """
     t = np.asarray(dt, dtype=float)
     qq = np.asarray(q, dtype=float)
-    blk = np.stack(
-        [np.stack([t**3 / 3, t**2 / 2], -1), np.stack([t**2 / 2, t], -1)], -2
-    ) * qq[..., None, None]
+    blk = (
+        np.stack([np.stack([t**3 / 3, t**2 / 2], -1), np.stack([t**2 / 2, t], -1)], -2)
+        * qq[..., None, None]
+    )
     return _kron_blocks(blk, d)
 
 
@@ -209,6 +210,11 @@ def ct_noise(dt: ArrayLike, q: ArrayLike, q_omega: ArrayLike, d: int = 2) -> Flo
 # ---------------------------------------------------------------------------
 # Model objects (configuration in the constructor, data in the call)
 # ---------------------------------------------------------------------------
+def _names(d: int, prefixes: tuple[str, ...]) -> tuple[str, ...]:
+    axes = ("x", "y", "z")[:d]
+    return tuple(p + a for p in prefixes for a in axes)
+
+
 class MotionModel(Protocol):
     """What filters need from a motion model."""
 
@@ -217,6 +223,12 @@ class MotionModel(Protocol):
 
     @property
     def position_index(self) -> tuple[int, ...]: ...
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        """Names of the state components (e.g. ``("x", "y", "vx", "vy", "w")``); models
+        of different size are related through these names (IMM mixing)."""
+        ...
 
     @property
     def velocity_index(self) -> tuple[int, ...]: ...
@@ -245,6 +257,9 @@ class ConstantVelocity:
     q: float = 0.1
     d: int = 2
 
+    #: ``True`` when ``F`` and ``Q`` depend on ``dt`` only (filters may cache them)
+    is_linear = True
+
     @property
     def ndim_state(self) -> int:
         return 2 * self.d
@@ -256,6 +271,10 @@ class ConstantVelocity:
     @property
     def velocity_index(self) -> tuple[int, ...]:
         return tuple(range(self.d, 2 * self.d))
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return _names(self.d, ("", "v"))
 
     def transition(self, x: ArrayLike, dt: ArrayLike) -> tuple[FloatArray, FloatArray]:
         F = cv_transition(dt, self.d)
@@ -272,6 +291,9 @@ class ConstantAcceleration:
     q: float = 0.01
     d: int = 2
 
+    #: ``True`` when ``F`` and ``Q`` depend on ``dt`` only (filters may cache them)
+    is_linear = True
+
     @property
     def ndim_state(self) -> int:
         return 3 * self.d
@@ -283,6 +305,10 @@ class ConstantAcceleration:
     @property
     def velocity_index(self) -> tuple[int, ...]:
         return tuple(range(self.d, 2 * self.d))
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return _names(self.d, ("", "v", "a"))
 
     def transition(self, x: ArrayLike, dt: ArrayLike) -> tuple[FloatArray, FloatArray]:
         F = ca_transition(dt, self.d)
@@ -310,6 +336,9 @@ class CoordinatedTurn:
     q_omega: float = 1e-4
     d: int = 2
 
+    #: ``True`` when ``F`` and ``Q`` depend on ``dt`` only (filters may cache them)
+    is_linear = False
+
     @property
     def ndim_state(self) -> int:
         return 2 * self.d + 1
@@ -321,6 +350,10 @@ class CoordinatedTurn:
     @property
     def velocity_index(self) -> tuple[int, ...]:
         return tuple(range(self.d, 2 * self.d))
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return _names(self.d, ("", "v")) + ("w",)
 
     def transition(self, x: ArrayLike, dt: ArrayLike) -> tuple[FloatArray, FloatArray]:
         return ct_transition(x, dt), ct_jacobian(x, dt)

@@ -88,7 +88,9 @@ class Measurements:
         return np.array([COMPONENTS[c] == "rad" for c in self.components])
 
 
-def _observer_state(observer: Trajectory | ArrayLike | None, t: FloatArray) -> tuple[FloatArray, FloatArray]:
+def _observer_state(
+    observer: Trajectory | ArrayLike | None, t: FloatArray
+) -> tuple[FloatArray, FloatArray]:
     if observer is None:
         return np.zeros((t.size, 3)), np.zeros((t.size, 3))
     if isinstance(observer, Trajectory):
@@ -148,15 +150,17 @@ def observe(
     std = sigma * np.where(outlier, np.sqrt(scale), 1.0)
     z = truth + std * rng.standard_normal((n, m))
     ang = np.array([COMPONENTS[c] == "rad" for c in comps])
-    for j in np.flatnonzero(ang):
-        if comps[j] == "azimuth":
-            z[:, j] = wrap_2pi(z[:, j])
+    for ja in np.flatnonzero(ang):
+        if comps[ja] == "azimuth":
+            z[:, ja] = wrap_2pi(z[:, ja])
     if "range" in comps:
-        j = comps.index("range")
-        z[:, j] = np.abs(z[:, j])
-    detected = rng.random(n) < p_detect
+        jr = comps.index("range")
+        z[:, jr] = np.abs(z[:, jr])
+    detected: NDArray[np.bool_] = np.asarray(rng.random(n) < p_detect)
     z[~detected] = np.nan
-    return Measurements(t.copy(), z, comps, spos, svel, outlier & detected[:, None], detected, truth)
+    return Measurements(
+        t.copy(), z, comps, spos, svel, outlier & detected[:, None], detected, truth
+    )
 
 
 def uniform_clutter(

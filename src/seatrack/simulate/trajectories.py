@@ -50,7 +50,9 @@ class Leg:
 
     def __post_init__(self) -> None:
         if not np.isfinite(self.duration) or self.duration <= 0:
-            raise ValueError(f"leg duration must be a positive number of seconds, got {self.duration}")
+            raise ValueError(
+                f"leg duration must be a positive number of seconds, got {self.duration}"
+            )
         for name in ("turn_rate", "accel", "climb_rate"):
             if not np.isfinite(getattr(self, name)):
                 raise ValueError(f"leg {name} must be finite, got {getattr(self, name)}")
@@ -69,7 +71,7 @@ class Leg:
 
     @classmethod
     def turn_g(cls, angle: float, g: float, speed: float) -> Leg:
-        """Coordinated turn through ``angle`` rad with lateral acceleration ``g`` (in g) at ``speed``."""
+        """Coordinated turn through ``angle`` rad at lateral acceleration ``g`` (in g)."""
         return cls.turn(angle, g * G0 / speed)
 
     @classmethod
@@ -129,7 +131,10 @@ class Trajectory:
         h01 = -2 * s**3 + 3 * s**2
         h11 = s**3 - s**2
         return (
-            h00 * self.pos[i] + h10 * h * self.vel[i] + h01 * self.pos[i + 1] + h11 * h * self.vel[i + 1]
+            h00 * self.pos[i]
+            + h10 * h * self.vel[i]
+            + h01 * self.pos[i + 1]
+            + h11 * h * self.vel[i + 1]
         )
 
 
@@ -213,7 +218,9 @@ def trajectory(
     pos = np.empty((tt.size, 3))
     for i, (ti, k) in enumerate(zip(tt, k_of, strict=True)):
         tau = ti - leg_start[k]
-        pos[i] = p_start[k] + _displacement(c_start[k], s_start[k], w[k], a[k], vz[k], tau, max_substep)
+        pos[i] = p_start[k] + _displacement(
+            c_start[k], s_start[k], w[k], a[k], vz[k], tau, max_substep
+        )
     tau = tt - leg_start[k_of]
     crs = c_start[k_of] + w[k_of] * tau
     spd = s_start[k_of] + a[k_of] * tau
@@ -226,10 +233,14 @@ def trajectory(
         ],
         -1,
     )
-    return Trajectory(tt, pos, vel, acc, np.asarray(wrap_2pi(crs)), spd, w[k_of].astype(float))
+    return Trajectory(
+        tt.astype(np.float64), pos, vel, acc, np.asarray(wrap_2pi(crs)), spd, w[k_of].astype(float)
+    )
 
 
-def _displacement(c: float, s: float, w: float, a: float, vz: float, T: float, h: float) -> FloatArray:
+def _displacement(
+    c: float, s: float, w: float, a: float, vz: float, T: float, h: float
+) -> FloatArray:
     """Displacement after ``T`` s with course ``c + w t`` and speed ``s + a t`` (Simpson)."""
     if T <= 0:
         return np.zeros(3)

@@ -1,0 +1,78 @@
+import numpy as np
+
+from seatrack.filters.ekf import run_ekf, track_plots
+from seatrack.io.plots import PlotTrack
+from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+
+
+def _plots(meas, with_el=True, with_rr=True):
+    c = list(meas.components)
+    return PlotTrack(
+        track="1",
+        t=meas.t,
+        range=meas.z[:, c.index("range")],
+        azimuth=meas.z[:, c.index("azimuth")],
+        elevation=meas.z[:, c.index("elevation")] if with_el else None,
+        range_rate=meas.z[:, c.index("range_rate")] if with_rr else None,
+        sensor=meas.sensor_pos,
+        sensor_vel=meas.sensor_vel,
+        lines=np.arange(meas.t.size) + 2,
+    )
+
+
+def test_ekf_3d_with_range_rate_is_consistent_on_straight_target():
+    tr = trajectory([20000.0, 15000.0, 3000.0], np.radians(250), 200.0, [Leg.straight(300)], dt=2.0)
+    sig = [30.0, np.radians(0.3), np.radians(0.3), 1.0]
+    # the truth is exactly straight, so a consistent filter needs (almost) no process noise
+    cfg = {
+        "q": 1e-6,
+        "sigma_range_m": 30.0,
+        "sigma_azimuth_deg": 0.3,
+        "sigma_elevation_deg": 0.3,
+        "sigma_range_rate_mps": 1.0,
+        "initial_speed_sigma_mps": 300.0,
+    }
+    nees = []
+    for seed in range(30):
+        m = observe(
+            tr,
+            None,
+            ["range", "azimuth", "elevation", "range_rate"],
+            NoiseModel(sig),
+            np.random.default_rng(seed),
+        )
+        run = run_ekf(_plots(m), cfg)
+        e = run.x - tr.state("cv3")
+        nees.append(np.einsum("ki,kij,kj->k", e[50:], np.linalg.inv(run.P[50:]), e[50:]))
+    anees = np.mean(nees)
+    # 30 runs x 101 steps of a 6-dof chi-square (correlated in time): loose but two-sided
+    assert 4.5 < anees < 8.0
+
+
+def test_track_plots_columns_and_2d():
+    tr = trajectory([3000.0, 1000.0], np.radians(10), 8.0, [Leg.straight(200)], dt=5.0)
+    own = trajectory([0.0, 0.0], np.radians(90), 5.0, [Leg.straight(200)], dt=5.0)
+    m = observe(
+        tr, own, ["range", "azimuth"], NoiseModel([5.0, np.radians(1.0)]), np.random.default_rng(0)
+    )
+    pt = _plots(m, with_el=False, with_rr=False)
+    cols = track_plots(pt, {"sigma_range_m": 5.0, "sigma_azimuth_deg": 1.0, "q": 1e-3})
+    for c in (
+        "x_m",
+        "y_m",
+        "z_m",
+        "vx_mps",
+        "vy_mps",
+        "vz_mps",
+        "std_x_m",
+        "std_y_m",
+        "std_z_m",
+        "nis",
+    ):
+        assert cols[c].shape == (len(pt),)
+    assert np.all(cols["z_m"] == 0)
+    err = np.hypot(cols["x_m"] - tr.pos[:, 0], cols["y_m"] - tr.pos[:, 1])
+    raw = m.sensor_pos[:, :2] + m.z[:, :1] * np.stack([np.sin(m.z[:, 1]), np.cos(m.z[:, 1])], -1)
+    raw_err = np.hypot(*(raw - tr.pos[:, :2]).T)
+    half = len(pt) // 2
+    assert np.sqrt(np.mean(err[half:] ** 2)) < 0.5 * np.sqrt(np.mean(raw_err[half:] ** 2))

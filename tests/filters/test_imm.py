@@ -1,0 +1,160 @@
+import numpy as np
+import pytest
+from filterpy.kalman import IMMEstimator, KalmanFilter
+
+from seatrack import kalman
+from seatrack.filters.imm import IMM
+from seatrack.models import ConstantVelocity, CoordinatedTurn, Position, RangeBearing
+from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+
+PI = np.array([[0.97, 0.03], [0.05, 0.95]])  # [i, j] = P(j | i); FilterPy's M is the same
+
+
+def _filterpy_imm(models, x0, P0, R, dt):
+    fs = []
+    for m in models:
+        kf = KalmanFilter(4, 2)
+        kf.F = m.transition(x0, dt)[1]
+        kf.Q = m.noise(dt)
+        kf.H = Position(n=4).matrix()
+        kf.R = R.copy()
+        kf.x = x0.copy()
+        kf.P = P0.copy()
+        fs.append(kf)
+    return IMMEstimator(fs, np.array([0.5, 0.5]), PI)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_matches_filterpy_imm_two_cv_models(seed):
+    rng = np.random.default_rng(seed)
+    dt = 2.0
+    models = [ConstantVelocity(q=0.01), ConstantVelocity(q=4.0)]
+    R = np.diag([30.0, 20.0])
+    x0 = np.array([0.0, 0.0, 10.0, 5.0])
+    P0 = np.diag([100.0, 100.0, 25.0, 25.0])
+    imm = IMM(models, PI, Position(n=4))
+    st = imm.initial_state(x0, P0)
+    fimm = _filterpy_imm(models, x0, P0, R, dt)
+    tr = trajectory(
+        [0, 0], 1.1, 11.0, [Leg.straight(60), Leg.turn(2.0, 0.1), Leg.straight(60)], dt=dt
+    )
+    for k in range(1, len(tr.t)):
+        z = tr.pos[k, :2] + rng.normal(size=2) * 5
+        r = imm.step(st, z, dt, R)
+        st = r.state
+        fimm.predict()
+        fimm.update(z)
+        np.testing.assert_allclose(r.x, fimm.x, rtol=1e-9, atol=1e-8)
+        np.testing.assert_allclose(r.P, fimm.P, rtol=1e-9, atol=1e-8)
+        np.testing.assert_allclose(st.mu, fimm.mu, rtol=1e-9, atol=1e-12)
+        for j in range(2):
+            np.testing.assert_allclose(st.X[j], fimm.filters[j].x, rtol=1e-9, atol=1e-8)
+
+
+def test_single_model_imm_is_the_kalman_filter():
+    rng = np.random.default_rng(0)
+    m = ConstantVelocity(q=0.5)
+    imm = IMM([m], [[1.0]], Position(n=4))
+    x0, P0 = np.array([0.0, 0, 1, 1]), np.eye(4) * 10
+    st = imm.initial_state(x0, P0)
+    x, P = x0, P0
+    R = np.eye(2)
+    for _ in range(20):
+        z = rng.normal(size=2)
+        r = imm.step(st, z, 1.0, R)
+        st = r.state
+        F = m.transition(x, 1.0)[1]
+        x, P = kalman.predict(x, P, F, m.noise(1.0))
+        u = kalman.update(x, P, z, Position(n=4).matrix(), R)
+        x, P = u.x, u.P
+        np.testing.assert_allclose(r.x, x, atol=1e-10)
+        np.testing.assert_allclose(r.P, P, atol=1e-10)
+        assert r.log_likelihood == pytest.approx(u.log_likelihood)
+
+
+def test_unequal_state_sizes_mix_by_name():
+    cv, ct = ConstantVelocity(q=0.1), CoordinatedTurn(q=0.1, q_omega=1e-4)
+    imm = IMM([cv, ct], PI, [RangeBearing(n=4), RangeBearing(n=5)])
+    assert imm.union_names == ("x", "y", "vx", "vy", "w")
+    assert imm.output_names == ("x", "y", "vx", "vy")
+    st = imm.initial_state(
+        np.array([1000.0, 2000, 5, 0]), np.eye(4) * 100, extra={"w": (0.02, 1e-4)}
+    )
+    # CV has no turn rate: mixing into CT takes w from CT's own estimate
+    pred = imm.predict(st, 1.0)
+    xct, Pct = imm.model_state(pred, 1)
+    assert xct.shape == (5,) and Pct.shape == (5, 5)
+    assert xct[4] == pytest.approx(0.02)
+    assert Pct[4, 4] == pytest.approx(1e-4 + 1e-4 * 1.0)  # own variance + q_omega * dt
+    xcv, Pcv = imm.model_state(pred, 0)
+    assert xcv.shape == (4,)
+    assert np.all(np.linalg.eigvalsh(Pct) > 0)
+
+
+def test_cv_ct_imm_tracks_turn_better_than_cv_and_is_consistent():
+    dt = 2.0
+    speed = 15.0
+    tr = trajectory(
+        [8000.0, 3000.0],
+        np.radians(300.0),
+        speed,
+        [Leg.straight(120), Leg.turn(np.radians(180), np.radians(3.0)), Leg.straight(120)],
+        dt=dt,
+    )
+    sig = np.array([15.0, np.radians(0.4)])
+    R = np.diag(sig**2)
+    runs = 40
+    err_imm, err_cv, nees = [], [], []
+    for seed in range(runs):
+        rng = np.random.default_rng(seed)
+        meas = observe(tr, None, ["range", "azimuth"], NoiseModel(sig), rng)
+        imm = IMM(
+            [ConstantVelocity(q=0.01), CoordinatedTurn(q=0.01, q_omega=1e-5)],
+            PI,
+            [RangeBearing(n=4), RangeBearing(n=5)],
+        )
+        x0 = np.concatenate([tr.pos[0, :2], tr.vel[0, :2]])
+        P0 = np.diag([400.0, 400, 25, 25])
+        st = imm.initial_state(x0, P0, extra={"w": (0.0, np.radians(4) ** 2)})
+        cv = ConstantVelocity(q=0.01)
+        x, P = x0.copy(), P0.copy()
+        for k in range(1, len(tr.t)):
+            r = imm.step(st, meas.z[k], dt, R)
+            st = r.state
+            F = cv.transition(x, dt)[1]
+            x, P = kalman.predict(x, P, F, cv.noise(dt))
+            m = RangeBearing(n=4)
+            u = kalman.extended_update(x, P, meas.z[k], m.h(x), m.jacobian(x), R, m.angular)
+            x, P = u.x, u.P
+            truth = np.concatenate([tr.pos[k, :2], tr.vel[k, :2]])
+            err_imm.append(np.linalg.norm(r.x[:2] - truth[:2]))
+            err_cv.append(np.linalg.norm(x[:2] - truth[:2]))
+            e = r.x - truth
+            nees.append(e @ np.linalg.solve(r.P, e))
+            assert np.isclose(st.mu.sum(), 1.0)
+    rmse_imm = np.sqrt(np.mean(np.square(err_imm)))
+    rmse_cv = np.sqrt(np.mean(np.square(err_cv)))
+    assert rmse_imm < 0.7 * rmse_cv
+    # IMM covariance is roughly honest through the turn (4 dof; loose two-sided sanity band)
+    assert 2.0 < np.mean(nees) < 8.0
+
+
+def test_batch_imm_equals_single_and_survives_underflow():
+    models = [ConstantVelocity(q=0.01), ConstantVelocity(q=4.0)]
+    imm = IMM(models, PI, Position(n=4))
+    x0 = np.array([[0.0, 0, 1, 1], [10.0, 5, -1, 0]])
+    st = imm.initial_state(x0, np.eye(4) * 10)
+    z = np.array([[1.0, 2.0], [1e9, -1e9]])  # second track: likelihoods underflow
+    r = imm.step(st, z, 1.0, np.eye(2))
+    assert np.all(np.isfinite(r.state.mu)) and np.allclose(r.state.mu.sum(-1), 1.0)
+    s0 = imm.initial_state(x0[0], np.eye(4) * 10)
+    r0 = imm.step(s0, z[0], 1.0, np.eye(2))
+    np.testing.assert_allclose(r.x[0], r0.x, rtol=1e-12)
+    np.testing.assert_allclose(r.state.mu[0], r0.state.mu, rtol=1e-12)
+
+
+def test_bad_transition_rejected():
+    with pytest.raises(ValueError, match="summing to 1"):
+        IMM([ConstantVelocity(), ConstantVelocity()], [[0.5, 0.4], [0.5, 0.5]], Position(n=4))
+    with pytest.raises(ValueError, match="2x2"):
+        IMM([ConstantVelocity(), ConstantVelocity()], [[1.0]], Position(n=4))

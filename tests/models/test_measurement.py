@@ -1,0 +1,82 @@
+import numpy as np
+import pytest
+
+from seatrack.models import (
+    Bearing,
+    Position,
+    RangeBearing,
+    RangeBearingElevation,
+    RangeRate,
+    Stacked,
+    numerical_jacobian,
+)
+
+rng = np.random.default_rng(7)
+
+
+def _check(model, x, sensor, eps=1e-6):
+    J = model.jacobian(x, sensor)
+    Jn = numerical_jacobian(lambda s: model.h(s, sensor), x, angular=model.angular, eps=eps)
+    np.testing.assert_allclose(J, Jn, rtol=1e-6, atol=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_bearing_jacobian(seed):
+    r = np.random.default_rng(seed)
+    x = np.concatenate([r.uniform(-5000, 5000, 2), r.uniform(-10, 10, 2)])
+    _check(Bearing(n=4), x, r.uniform(-100, 100, 2))
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_range_bearing_jacobian(seed):
+    r = np.random.default_rng(seed)
+    x = np.concatenate([r.uniform(-5000, 5000, 2), r.uniform(-10, 10, 2), [0.01]])
+    _check(RangeBearing(n=5), x, r.uniform(-100, 100, 2))
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_range_bearing_elevation_jacobian(seed):
+    r = np.random.default_rng(seed)
+    x = np.concatenate([r.uniform(-5000, 5000, 3), r.uniform(-100, 100, 3)])
+    _check(RangeBearingElevation(), x, r.uniform(-100, 100, 3))
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_range_rate_jacobian_moving_sensor(seed):
+    r = np.random.default_rng(seed)
+    x = np.concatenate([r.uniform(-5000, 5000, 3), r.uniform(-100, 100, 3)])
+    sensor = np.concatenate([r.uniform(-100, 100, 3), r.uniform(-10, 10, 3)])
+    _check(RangeRate(), x, sensor)
+
+
+def test_stacked_and_bearing_near_north_wraps():
+    m = Stacked([RangeBearingElevation(), RangeRate()])
+    x = np.array([-1e-3, 3000.0, 100.0, 5.0, -3.0, 0.0])  # just west of North: bearing ~ 2 pi
+    z = m.h(x)
+    assert z.shape == (4,) and z[1] > 6.28
+    # absolute step 1e-3 m on the tiny x coordinate keeps round-off of the 3 km range below 1e-9
+    _check(m, x, None, eps=1e-3)
+    assert m.angular.tolist() == [False, True, True, False]
+
+
+def test_values_and_conventions():
+    x = np.array([1000.0, 0.0, 0.0, 10.0])
+    z = RangeBearing().h(x)
+    np.testing.assert_allclose(z, [1000.0, np.pi / 2])
+    # target moving north while due east: range rate zero; moving east: +10 (opening)
+    assert abs(RangeRate(n=4, pos=(0, 1), vel=(2, 3)).h(x)[0]) < 1e-12
+    assert RangeRate(n=4, pos=(0, 1), vel=(2, 3)).h(np.array([1000.0, 0, 10, 0]))[
+        0
+    ] == pytest.approx(10)
+    e = RangeBearingElevation().h(np.array([0.0, 1000.0, 1000.0, 0, 0, 0]))
+    np.testing.assert_allclose(e, [np.sqrt(2) * 1000, 0.0, np.pi / 4])
+
+
+def test_batch_shapes():
+    X = rng.normal(size=(7, 3, 6)) * 1000
+    m = RangeBearingElevation()
+    assert m.h(X).shape == (7, 3, 3)
+    assert m.jacobian(X).shape == (7, 3, 3, 6)
+    J = m.jacobian(X)
+    np.testing.assert_allclose(J[2, 1], m.jacobian(X[2, 1]))
+    assert Position(n=4).jacobian(X[..., :4]).shape == (7, 3, 2, 4)

@@ -62,15 +62,11 @@ _LOG_2PI = math.log(2.0 * math.pi)
 # Compiled kernels (one core each, broadcast by the gufunc machinery)
 # ---------------------------------------------------------------------------
 @njit(cache=True)
-def _predict_core(x, P, F, Q, xo, Po):  # pragma: no cover - compiled
-    """``xo = F x``; ``Po = F P F^T + Q`` (symmetrised)."""
-    n = x.shape[0]
+def _cov_core(P, F, Q, Po):  # pragma: no cover - compiled
+    """``Po = F P F^T + Q`` (symmetrised)."""
+    n = P.shape[0]
     FP = np.empty((n, n))
     for i in range(n):
-        s = 0.0
-        for j in range(n):
-            s += F[i, j] * x[j]
-        xo[i] = s
         for j in range(n):
             s = 0.0
             for k in range(n):
@@ -84,6 +80,18 @@ def _predict_core(x, P, F, Q, xo, Po):  # pragma: no cover - compiled
             v = s + 0.5 * (Q[i, j] + Q[j, i])
             Po[i, j] = v
             Po[j, i] = v
+
+
+@njit(cache=True)
+def _predict_core(x, P, F, Q, xo, Po):  # pragma: no cover - compiled
+    """``xo = F x``; ``Po = F P F^T + Q`` (symmetrised)."""
+    n = x.shape[0]
+    for i in range(n):
+        s = 0.0
+        for j in range(n):
+            s += F[i, j] * x[j]
+        xo[i] = s
+    _cov_core(P, F, Q, Po)
 
 
 @guvectorize(
@@ -103,22 +111,7 @@ def _predict_kernel(x, P, F, Q, xo, Po):  # pragma: no cover - compiled
     cache=True,
 )
 def _cov_predict_kernel(P, F, Q, Po):  # pragma: no cover - compiled
-    n = P.shape[0]
-    FP = np.empty((n, n))
-    for i in range(n):
-        for j in range(n):
-            s = 0.0
-            for k in range(n):
-                s += F[i, k] * P[k, j]
-            FP[i, j] = s
-    for i in range(n):
-        for j in range(i, n):
-            s = 0.0
-            for k in range(n):
-                s += FP[i, k] * F[j, k]
-            v = s + 0.5 * (Q[i, j] + Q[j, i])
-            Po[i, j] = v
-            Po[j, i] = v
+    _cov_core(P, F, Q, Po)
 
 
 @njit(cache=True)

@@ -21,7 +21,7 @@ Bar-Shalom, Li & Kirubarajan (2001), sections 6.2 (white-noise acceleration mode
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
+from typing import ClassVar, Protocol
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -243,7 +243,39 @@ class MotionModel(Protocol):
 
 
 @dataclass(frozen=True)
-class ConstantVelocity:
+class _Polynomial:
+    """Shared shell of the linear polynomial models (CV: order 1, CA: order 2)."""
+
+    q: float = 0.1
+    d: int = 2
+
+    _order: ClassVar[int] = 1
+    #: ``True`` when ``F`` and ``Q`` depend on ``dt`` only (filters may cache them)
+    is_linear: ClassVar[bool] = True
+
+    @property
+    def ndim_state(self) -> int:
+        return (self._order + 1) * self.d
+
+    @property
+    def position_index(self) -> tuple[int, ...]:
+        return tuple(range(self.d))
+
+    @property
+    def velocity_index(self) -> tuple[int, ...]:
+        return tuple(range(self.d, 2 * self.d))
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return _names(self.d, ("", "v", "a")[: self._order + 1])
+
+    def transition(self, x: ArrayLike, dt: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        F = _poly_transition(dt, self._order, self.d)
+        return np.einsum("...ij,...j->...i", F, np.asarray(x, float)), F
+
+
+@dataclass(frozen=True)
+class ConstantVelocity(_Polynomial):
     """Constant-velocity model with continuous white-noise acceleration.
 
     Parameters
@@ -256,63 +288,19 @@ class ConstantVelocity:
 
     q: float = 0.1
     d: int = 2
-
-    #: ``True`` when ``F`` and ``Q`` depend on ``dt`` only (filters may cache them)
-    is_linear = True
-
-    @property
-    def ndim_state(self) -> int:
-        return 2 * self.d
-
-    @property
-    def position_index(self) -> tuple[int, ...]:
-        return tuple(range(self.d))
-
-    @property
-    def velocity_index(self) -> tuple[int, ...]:
-        return tuple(range(self.d, 2 * self.d))
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        return _names(self.d, ("", "v"))
-
-    def transition(self, x: ArrayLike, dt: ArrayLike) -> tuple[FloatArray, FloatArray]:
-        F = cv_transition(dt, self.d)
-        return np.einsum("...ij,...j->...i", F, np.asarray(x, float)), F
+    _order: ClassVar[int] = 1
 
     def noise(self, dt: ArrayLike) -> FloatArray:
         return cv_noise(dt, self.q, self.d)
 
 
 @dataclass(frozen=True)
-class ConstantAcceleration:
+class ConstantAcceleration(_Polynomial):
     """Constant-acceleration model with white-noise jerk ``q`` (m^2/s^5)."""
 
     q: float = 0.01
     d: int = 2
-
-    #: ``True`` when ``F`` and ``Q`` depend on ``dt`` only (filters may cache them)
-    is_linear = True
-
-    @property
-    def ndim_state(self) -> int:
-        return 3 * self.d
-
-    @property
-    def position_index(self) -> tuple[int, ...]:
-        return tuple(range(self.d))
-
-    @property
-    def velocity_index(self) -> tuple[int, ...]:
-        return tuple(range(self.d, 2 * self.d))
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        return _names(self.d, ("", "v", "a"))
-
-    def transition(self, x: ArrayLike, dt: ArrayLike) -> tuple[FloatArray, FloatArray]:
-        F = ca_transition(dt, self.d)
-        return np.einsum("...ij,...j->...i", F, np.asarray(x, float)), F
+    _order: ClassVar[int] = 2
 
     def noise(self, dt: ArrayLike) -> FloatArray:
         return ca_noise(dt, self.q, self.d)
@@ -336,8 +324,8 @@ class CoordinatedTurn:
     q_omega: float = 1e-4
     d: int = 2
 
-    #: ``True`` when ``F`` and ``Q`` depend on ``dt`` only (filters may cache them)
-    is_linear = False
+    #: the turn rate makes the transition depend on the state
+    is_linear: ClassVar[bool] = False
 
     @property
     def ndim_state(self) -> int:

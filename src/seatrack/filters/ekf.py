@@ -161,10 +161,15 @@ def run_ekf(plots: PlotTrack, config: Mapping[str, Any]) -> EKFRun:
     nis = np.full(N, np.nan)
     xs[0], Ps[0] = x, P
     ang = pm.model.angular
+    cache: dict[float, tuple[FloatArray, FloatArray]] = {}  # F, Q per scan interval
     for k in range(1, N):
         dt = float(plots.t[k] - plots.t[k - 1])
-        fx, F = cv.transition(x, dt)
-        x, P = kalman.predict(x, P, np.ascontiguousarray(F), np.ascontiguousarray(cv.noise(dt)))
+        FQ = cache.get(dt)
+        if FQ is None:
+            if len(cache) > 256:  # irregular sampling: keep the cache small
+                cache.clear()
+            FQ = cache.setdefault(dt, (cv.transition(x, dt)[1], cv.noise(dt)))
+        x, P = kalman.predict(x, P, FQ[0], FQ[1])
         s = pm.sensor[k]
         res = kalman.extended_update(
             x, P, pm.z[k], pm.model.h(x, s), pm.model.jacobian(x, s), pm.R, ang

@@ -1,0 +1,164 @@
+"""``seatrack evaluate SCENARIO``: Monte-Carlo comparison of the track methods."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import typer
+
+
+def _methods(arg: str | None) -> list[str]:
+    from seatrack.filters.registry import METHODS
+
+    if arg is None or arg.strip() in ("", "all"):
+        return list(METHODS)
+    names = [m.strip() for m in arg.split(",") if m.strip()]
+    for m in names:
+        if m not in METHODS:
+            raise ValueError(f"--methods: unknown method {m!r}; choose from {', '.join(METHODS)}")
+    return names
+
+
+def register(app: typer.Typer) -> None:
+    @app.command("evaluate")
+    def evaluate(
+        scenario: str = typer.Argument(..., help="Scenario TOML file or bundled scenario name."),
+        runs: int | None = typer.Option(
+            None, "--runs", "-n", min=1, help="Monte-Carlo runs (default: the scenario's)."
+        ),
+        methods: str | None = typer.Option(
+            None, "--methods", "-m", help="Comma-separated track methods (default: all registered)."
+        ),
+        processes: int = typer.Option(1, "--processes", "-p", min=1, help="Worker processes."),
+        seed: int | None = typer.Option(
+            None, "--seed", help="Master seed (default: the scenario's)."
+        ),
+        sensor: str | None = typer.Option(
+            None, "--sensor", help="Sensor to track with (default: first active)."
+        ),
+        skip: int = typer.Option(
+            3, "--skip", min=0, help="Initial scans left out of the averages."
+        ),
+        csv_out: Path | None = typer.Option(
+            None, "--csv", help="Also write the table to this CSV file."
+        ),
+        plots: Path | None = typer.Option(
+            None,
+            "--plots",
+            help="Folder for plots of position RMSE (with the CRB when it applies) and "
+            "ANEES against time.",
+        ),
+        progress: bool = typer.Option(
+            True, "--progress/--no-progress", help="Show a progress bar."
+        ),
+    ) -> None:
+        """Run a seeded Monte-Carlo comparison of track methods on a scenario.
+
+        Each run simulates the scenario and runs every method on each target's plots; the
+        table gives position/velocity RMSE (after --skip scans), the peak position error,
+        per-axis ANEES (1 dof; 1.0 for a consistent filter) with the share of steps inside
+        the 95% chi-square bounds, and the time per plot. Results do not depend on
+        --processes.
+        """
+        import csv
+
+        from rich.console import Console
+
+        from seatrack.evaluate.metrics import chi2_interval
+        from seatrack.evaluate.montecarlo import format_table, rich_table
+        from seatrack.evaluate.tracking import (
+            SUMMARY_COLUMNS,
+            compare_methods,
+            method_config,
+            position_crb,
+            run_methods,
+            summarize,
+            tracking_sensor,
+            user_keys,
+        )
+        from seatrack.simulate.scenarios import load_scenario, resolve_scenario
+
+        sc = load_scenario(resolve_scenario(scenario))
+        names = _methods(methods)
+        n = sc.runs if runs is None else runs
+        s = sc.seed if seed is None else seed
+        sens = tracking_sensor(sc, sensor)
+        # one trial run in this process: reports why a method cannot run on this scenario
+        # and compiles the numba kernels before the timed runs (not part of the statistics)
+        trial = sc.simulate(np.random.default_rng(np.random.SeedSequence(s).spawn(1)[0]))
+        configs = {m: method_config(sc, sens, m) for m in names}
+        keys = {m: user_keys(sc, m) for m in names}
+        errors, notes = {}, {}
+        for m, rr in run_methods(trial.sensor(sens.name), names, configs, user_keys=keys).items():
+            errors[m] = next((r.error for r in rr if r.error), "")
+            notes[m] = sorted({k for r in rr for k in r.dropped})
+        res = compare_methods(
+            sc, names, n, s, sensor=sens.name, processes=processes, progress=progress
+        )
+        dims = 3 if "elevation" in sens.components else 2
+        crb = position_crb(sc, sens.name)
+        rows = summarize(res, names, dims=dims, skip=skip, crb=crb)
+        lo, hi = chi2_interval(1, n)
+        title = f"{sc.name}: {n} runs, seed {s}, sensor {sens.name}, {len(sc.targets)} target(s)"
+        console = Console()
+        if console.is_terminal:
+            console.print(rich_table(rows, SUMMARY_COLUMNS, title=title))
+        else:
+            typer.echo(f"{title}\n{format_table(rows, SUMMARY_COLUMNS)}")
+        console.print(
+            f"ANEES 95% bounds per step (1 dof, {n} runs): [{lo:.3f}, {hi:.3f}]; "
+            f"{res.elapsed_s:.1f} s"
+        )
+        for m, e in errors.items():
+            if e:
+                typer.echo(f"{m} failed on this scenario: {e}")
+            elif notes[m]:
+                typer.echo(
+                    f"note: {m} does not accept {', '.join(notes[m])}: it ran with its own "
+                    "noise settings (set them under [evaluate." + m + "] in the scenario)"
+                )
+        if crb is not None:
+            rms = float(np.sqrt(np.nanmean(crb[:, skip:] ** 2)))
+            console.print(
+                f"position CRB (constant-velocity truth, no process noise): {rms:.1f} m RMS"
+            )
+        if csv_out is not None:
+            with csv_out.open("w", newline="") as fh:
+                w = csv.DictWriter(fh, [c.key for c in SUMMARY_COLUMNS], extrasaction="ignore")
+                w.writeheader()
+                w.writerows(rows)
+            console.print(f"wrote {csv_out}")
+        if plots is not None:
+            from seatrack.evaluate.tracking import time_histories
+            from seatrack.report.plots import error_figure, save
+
+            ok = [m for m in names if not errors[m]]
+            hist = time_histories(res, ok, dims=dims)
+            t = sens.scan_times(sc.duration)
+            bounds = None
+            if crb is not None:
+                finite = np.all(np.isfinite(crb), axis=0)  # NaN while not yet observable
+                rms_crb = np.full(crb.shape[1], np.nan)
+                rms_crb[finite] = np.sqrt(np.mean(crb[:, finite] ** 2, axis=0))
+                bounds = {"CRB": rms_crb}
+            fig = error_figure(
+                t,
+                {m: hist[m]["pos_rmse"] for m in ok},
+                "position RMSE (m)",
+                title=title,
+                bounds=bounds,
+                logy=True,
+            )
+            p1 = save(fig, plots / "pos_rmse.png")
+            fig = error_figure(
+                t,
+                {m: 0.5 * (hist[m]["anees_x"] + hist[m]["anees_y"]) for m in ok},
+                "ANEES, mean of x and y (1 dof each)",
+                title=title,
+                # one axis's 95 % bounds: conservative for the mean of the two axes
+                hlines={f"95% bounds of one axis ({n} runs)": lo, "_upper": hi},
+                logy=True,
+            )
+            p2 = save(fig, plots / "anees.png")
+            console.print(f"wrote {p1} and {p2}")

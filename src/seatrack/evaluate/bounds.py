@@ -1,0 +1,377 @@
+"""Cramér–Rao lower bounds: batch (Fisher information) and posterior (recursive).
+
+* :func:`fisher_crb` -- the CRB of a deterministic parameter estimated from measurements
+  ``z = h(theta) + v``, ``v ~ N(0, W^-1)``: ``CRB = (J^T W J)^-1`` with ``J = dh/dtheta`` at
+  the true parameter (e.g. bearings-only TMA, Nardone, Lindgren & Gong 1984).
+* :func:`pcrb_linear` -- the posterior CRB of a linear-Gaussian system, which equals the
+  Kalman filter covariance.
+* :func:`pcrb` -- the Tichavský, Muravchik & Nehorai (1998) recursion for nonlinear
+  measurements (and linear or nonlinear dynamics) with additive Gaussian noise; the
+  expectations over the true state are taken as averages over Monte-Carlo truth samples.
+
+Conventions: the state of step ``k`` is ``x_k``; the dynamics are
+``x_{k+1} = f_k(x_k) + w_k``, ``w_k ~ N(0, Q_k)``; the measurement of step ``k`` is
+``z_k = h_k(x_k) + v_k``, ``v_k ~ N(0, R_k)``. Bounds are returned as covariances
+(inverse information matrices), shape ``(K + 1, n, n)`` for steps ``0..K``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+import scipy.linalg
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ["fisher_information", "fisher_crb", "pcrb_linear", "pcrb", "crb_deterministic"]
+
+FloatArray = NDArray[np.float64]
+
+
+def _f(a: ArrayLike) -> FloatArray:
+    return np.asarray(a, dtype=np.float64)
+
+
+def _spd_inverse(M: FloatArray, what: str) -> FloatArray:
+    """Inverse of a symmetric positive-definite matrix via Cholesky (clear error if not PD)."""
+    M = 0.5 * (M + M.T)
+    try:
+        c = scipy.linalg.cho_factor(M, lower=True)
+    except np.linalg.LinAlgError as exc:
+        w = np.linalg.eigvalsh(M)
+        raise np.linalg.LinAlgError(
+            f"{what} is singular or not positive definite (smallest eigenvalue {w[0]:.3g}, "
+            f"largest {w[-1]:.3g}): the state is not observable from these data"
+        ) from exc
+    inv = scipy.linalg.cho_solve(c, np.eye(M.shape[0]))
+    return 0.5 * (inv + inv.T)
+
+
+def _weight(W: ArrayLike, m: int) -> FloatArray:
+    w = _f(W)
+    if w.ndim == 0:
+        return np.eye(m) * float(w)
+    if w.ndim == 1:
+        if w.size != m:
+            raise ValueError(f"weight vector has {w.size} entries for {m} measurements")
+        return np.diag(w)
+    if w.shape != (m, m):
+        raise ValueError(f"weight matrix shape {w.shape} does not match {m} measurements")
+    return w
+
+
+def fisher_information(J: ArrayLike, W: ArrayLike) -> FloatArray:
+    """Fisher information ``J^T W J`` of Gaussian measurements.
+
+    Parameters
+    ----------
+    J : array_like, shape (m, n)
+        Jacobian of the ``m`` noise-free measurements with respect to the ``n`` parameters,
+        evaluated at the true parameter.
+    W : array_like, scalar, (m,) or (m, m)
+        Inverse measurement covariance ``R^-1`` (a vector is a diagonal; e.g.
+        ``1 / sigma**2``).
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+    """
+    Jm = _f(J)
+    if Jm.ndim != 2:
+        raise ValueError(f"J must be 2-D (m, n), got shape {Jm.shape}")
+    F = Jm.T @ _weight(W, Jm.shape[0]) @ Jm
+    return 0.5 * (F + F.T)
+
+
+def fisher_crb(J: ArrayLike, W: ArrayLike) -> FloatArray:
+    """Cramér–Rao bound ``(J^T W J)^-1`` for a batch estimate.
+
+    Parameters
+    ----------
+    J : array_like, shape (m, n)
+        Measurement Jacobian at the true parameter.
+    W : array_like, scalar, (m,) or (m, m)
+        Inverse measurement covariance.
+
+    Returns
+    -------
+    ndarray, shape (n, n)
+        Lower bound on the covariance of any unbiased estimator.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If the Fisher information is singular (the parameters are not observable, e.g.
+        bearings-only TMA without an own-ship manoeuvre).
+    """
+    return _spd_inverse(fisher_information(J, W), "Fisher information matrix")
+
+
+def _per_step(value: Any, K: int, name: str, allow_none: bool = False) -> list[Any]:
+    """Expand a constant matrix or a per-step sequence to a list of ``K`` entries."""
+    if value is None:
+        if allow_none:
+            return [None] * K
+        raise ValueError(f"{name} is required")
+    if isinstance(value, np.ndarray) and value.ndim == 2:
+        return [value] * K
+    if isinstance(value, np.ndarray) and value.ndim == 3:
+        seq: Sequence[Any] = list(value)
+    elif isinstance(value, (list, tuple)):
+        seq = value
+    else:
+        arr = _f(value)
+        if arr.ndim == 2:
+            return [arr] * K
+        seq = list(arr)
+    if len(seq) != K:
+        raise ValueError(f"{name} has {len(seq)} entries, expected {K}")
+    return [None if v is None else _f(v) for v in seq]
+
+
+def _seq_len(value: Any) -> int | None:
+    if isinstance(value, (list, tuple)):
+        return len(value)
+    if value is not None and np.ndim(value) == 3:
+        return int(np.shape(value)[0])
+    return None
+
+
+def _n_steps(
+    n_steps: int | None, transitions: Sequence[Any], measurements: Sequence[Any], offset: int
+) -> int:
+    """Number of transitions ``K`` from ``n_steps`` or the lengths of per-step sequences."""
+    lengths = {n for n in (_seq_len(v) for v in transitions) if n is not None}
+    lengths |= {n - offset for n in (_seq_len(v) for v in measurements) if n is not None}
+    if n_steps is not None:
+        return int(n_steps)
+    if len(lengths) == 1:
+        return lengths.pop()
+    if not lengths:
+        raise ValueError("n_steps is required when all of F, Q, H, R are constant")
+    raise ValueError(f"per-step sequences imply different numbers of steps {sorted(lengths)}")
+
+
+def _measurement_info(H: FloatArray | None, R: FloatArray | None) -> FloatArray | None:
+    if H is None:
+        return None
+    if R is None:
+        raise ValueError("R is missing for a step that has H")
+    Hm = np.atleast_2d(H)
+    Rm = np.atleast_2d(R)
+    c = scipy.linalg.cho_factor(0.5 * (Rm + Rm.T), lower=True)
+    info = Hm.T @ scipy.linalg.cho_solve(c, Hm)
+    return 0.5 * (info + info.T)
+
+
+def pcrb_linear(
+    P0: ArrayLike,
+    F: ArrayLike | Sequence[ArrayLike],
+    Q: ArrayLike | Sequence[ArrayLike],
+    H: ArrayLike | Sequence[ArrayLike | None],
+    R: ArrayLike | Sequence[ArrayLike | None],
+    n_steps: int | None = None,
+    measure_first: bool = False,
+) -> FloatArray:
+    """Posterior CRB of a linear-Gaussian system (Tichavský et al. 1998, eq. (21)).
+
+    ``J_0 = P0^-1`` (plus ``H_0^T R_0^-1 H_0`` if ``measure_first``) and
+
+    ``J_{k+1} = (Q_k + F_k J_k^-1 F_k^T)^-1 + H_{k+1}^T R_{k+1}^-1 H_{k+1}``.
+
+    For a linear-Gaussian system the bound is attained: ``J_k^-1`` equals the Kalman
+    filter covariance ``P_{k|k}`` started from ``P_{0|0} = P0``.
+
+    Parameters
+    ----------
+    P0 : array_like, (n, n)
+        Prior covariance of ``x_0``.
+    F, Q : array_like, (n, n) constant, or sequence of ``K`` matrices (per transition
+        ``k -> k+1``).
+    H, R : array_like, (m, n) and (m, m) constant, or sequences of ``K`` (measurements of
+        steps ``1..K``) or ``K + 1`` entries if ``measure_first`` (steps ``0..K``). A
+        ``None`` entry of ``H`` means no measurement at that step (missed detection).
+    n_steps : int, optional
+        ``K``; required only when every matrix is constant.
+    measure_first : bool
+        Whether step 0 also has a measurement.
+
+    Returns
+    -------
+    ndarray, shape (K + 1, n, n)
+        Bound covariances ``J_k^-1`` for ``k = 0..K``.
+    """
+    P0m = _f(P0)
+    K = _n_steps(n_steps, (F, Q), (H, R), int(measure_first))
+    Fs = _per_step(F, K, "F")
+    Qs = _per_step(Q, K, "Q")
+    nm = K + int(measure_first)
+    Hs = _per_step(H, nm, "H")
+    Rs = _per_step(R, nm, "R", allow_none=True)
+    if not measure_first:
+        Hs = [None, *Hs]
+        Rs = [None, *Rs]
+    n = P0m.shape[0]
+    out = np.empty((K + 1, n, n))
+    J = _spd_inverse(P0m, "prior covariance P0")
+    info0 = _measurement_info(Hs[0], Rs[0])
+    if info0 is not None:
+        J = J + info0
+    out[0] = _spd_inverse(J, "information matrix at step 0")
+    for k in range(K):
+        Pp = Fs[k] @ out[k] @ Fs[k].T + Qs[k]
+        J = _spd_inverse(Pp, f"predicted bound at step {k + 1}")
+        info = _measurement_info(Hs[k + 1], Rs[k + 1])
+        if info is not None:
+            J = J + info
+        out[k + 1] = _spd_inverse(J, f"information matrix at step {k + 1}")
+    return out
+
+
+def pcrb(
+    P0: ArrayLike,
+    truth: ArrayLike,
+    Q: ArrayLike | Sequence[ArrayLike],
+    measurement_jacobian: Callable[[FloatArray, int], FloatArray | None],
+    R: ArrayLike | Sequence[ArrayLike],
+    transition_jacobian: Callable[[FloatArray, int], FloatArray] | ArrayLike | None = None,
+    measure_first: bool = False,
+) -> FloatArray:
+    """Posterior CRB for additive-Gaussian nonlinear filtering (Tichavský et al. 1998).
+
+    With ``F_k = df_k/dx (x_k)`` and ``H_k = dh_k/dx (x_k)`` evaluated on the true states,
+
+    * ``D11 = E[F_k^T Q_k^-1 F_k]``, ``D12 = -E[F_k^T] Q_k^-1 = D21^T``,
+    * ``D22 = Q_k^-1 + E[H_{k+1}^T R_{k+1}^-1 H_{k+1}]``,
+    * ``J_{k+1} = D22 - D21 (J_k + D11)^-1 D12`` (eq. (21)).
+
+    When the dynamics are linear (``transition_jacobian`` a constant matrix) the
+    equivalent form ``J_{k+1} = (Q_k + F J_k^-1 F^T)^-1 + E[H^T R^-1 H]`` is used, which
+    does not need ``Q`` to be invertible.
+
+    Parameters
+    ----------
+    P0 : array_like, (n, n)
+        Prior covariance of ``x_0`` (``J_0 = P0^-1``).
+    truth : array_like, (runs, K + 1, n) or (K + 1, n)
+        True states of Monte-Carlo runs (the expectations are averages over runs).
+    Q : array_like, (n, n) or sequence of ``K`` -- process noise per transition.
+    measurement_jacobian : callable ``(x, k) -> H (m, n)`` or None
+        Jacobian of ``h_k`` at true state ``x`` of step ``k`` (None: no measurement).
+    R : array_like, (m, m) or sequence of ``K + 1`` (indexed by step) -- measurement noise.
+    transition_jacobian : callable ``(x, k) -> F (n, n)``, a constant (n, n) matrix, or
+        a sequence of ``K`` matrices. Default: identity.
+    measure_first : bool
+        Whether step 0 is measured.
+
+    Returns
+    -------
+    ndarray, shape (K + 1, n, n)
+        Bound covariances ``J_k^-1``.
+    """
+    X = _f(truth)
+    if X.ndim == 2:
+        X = X[None]
+    runs, K1, n = X.shape
+    K = K1 - 1
+    Qs = _per_step(Q, K, "Q")
+    Rs = _per_step(R, K + 1, "R")
+    linear: list[FloatArray] | None = None
+    if transition_jacobian is None:
+        linear = [np.eye(n)] * K
+    elif not callable(transition_jacobian):
+        linear = _per_step(transition_jacobian, K, "transition_jacobian")
+
+    def expected_info(k: int) -> FloatArray | None:
+        acc = np.zeros((n, n))
+        seen = False
+        for r in range(runs):
+            Hk = measurement_jacobian(X[r, k], k)
+            if Hk is None:
+                continue
+            info = _measurement_info(_f(Hk), Rs[k])
+            assert info is not None
+            acc += info
+            seen = True
+        return acc / runs if seen else None
+
+    out = np.empty((K + 1, n, n))
+    J = _spd_inverse(_f(P0), "prior covariance P0")
+    if measure_first:
+        i0 = expected_info(0)
+        if i0 is not None:
+            J = J + i0
+    out[0] = _spd_inverse(J, "information matrix at step 0")
+    for k in range(K):
+        if linear is not None:
+            Fk = linear[k]
+            J = _spd_inverse(Fk @ out[k] @ Fk.T + Qs[k], f"predicted bound at step {k + 1}")
+        else:
+            assert callable(transition_jacobian)
+            Qi = _spd_inverse(Qs[k], f"Q at step {k}")
+            D11 = np.zeros((n, n))
+            EF = np.zeros((n, n))
+            for r in range(runs):
+                Fk = _f(transition_jacobian(X[r, k], k))
+                D11 += Fk.T @ Qi @ Fk
+                EF += Fk
+            D11 /= runs
+            EF /= runs
+            D12 = -EF.T @ Qi
+            A = _spd_inverse(J + D11, f"J + D11 at step {k}")
+            J = Qi - D12.T @ A @ D12
+        info = expected_info(k + 1)
+        if info is not None:
+            J = J + info
+        out[k + 1] = _spd_inverse(J, f"information matrix at step {k + 1}")
+    return out
+
+
+def crb_deterministic(
+    info: ArrayLike | Sequence[ArrayLike],
+    F: ArrayLike | Sequence[ArrayLike],
+    rcond: float = 1e-12,
+) -> FloatArray:
+    """Filtering CRB of a deterministic (noise-free) trajectory without prior information.
+
+    With no process noise and no prior, the information about ``x_k`` from the
+    measurements of steps ``0..k`` obeys
+
+    ``J_0 = I_0``, ``J_{k+1} = F_k^-T J_k F_k^-1 + I_{k+1}``,
+
+    the limit ``Q -> 0``, ``P0 -> infinity`` of the Tichavský et al. (1998) recursion and
+    equal to the batch Fisher CRB of ``x_k`` from those measurements. This is the bound
+    for a constant-velocity target tracked from its first plot.
+
+    Parameters
+    ----------
+    info : (K + 1, n, n)
+        Expected measurement information ``E[H_k^T R_k^-1 H_k]`` of each step (times the
+        detection probability for missed detections without clutter).
+    F : (n, n) or (K, n, n)
+        Invertible transition matrices.
+    rcond : float
+        ``J_k`` counts as singular when its smallest eigenvalue is below ``rcond`` times
+        its largest.
+
+    Returns
+    -------
+    ndarray, shape (K + 1, n, n)
+        ``J_k^-1``; NaN where ``J_k`` is still singular (too few measurements so far).
+    """
+    I = np.asarray(info, dtype=np.float64)
+    K1, n, _ = I.shape
+    Fs = _per_step(F, K1 - 1, "F")
+    out = np.full((K1, n, n), np.nan)
+    J = 0.5 * (I[0] + I[0].T)
+    for k in range(K1):
+        if k > 0:
+            Fi = np.linalg.inv(Fs[k - 1])
+            J = Fi.T @ J @ Fi + I[k]
+            J = 0.5 * (J + J.T)
+        w = np.linalg.eigvalsh(J)
+        if w[0] <= rcond * w[-1]:
+            continue  # not yet observable
+        out[k] = _spd_inverse(J, "information")
+    return out

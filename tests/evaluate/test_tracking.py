@@ -1,0 +1,147 @@
+"""Tests of seatrack.evaluate.tracking: Monte-Carlo comparison of track methods, the
+position CRB of constant-velocity scenarios and the summary statistics."""
+
+import numpy as np
+import pytest
+
+from seatrack.evaluate.montecarlo import MonteCarloResult
+from seatrack.evaluate.tracking import (
+    compare_methods,
+    method_config,
+    position_crb,
+    run_methods,
+    summarize,
+    tracking_sensor,
+)
+from seatrack.simulate.scenarios import bundled_scenario, load_scenario, parse_scenario
+
+CV = {
+    "duration_s": 120.0,
+    "targets": [{"position_m": [4000.0, 9000.0], "course_deg": 150.0, "speed_mps": 10.0}],
+    "sensors": [
+        {
+            "name": "radar",
+            "type": "radar2d",
+            "sigma": {"azimuth_deg": 0.3, "range_m": 20.0},
+            "scan_period_s": 2.0,
+            "platform": "fixed",
+            "position_m": [0.0, 0.0],
+        }
+    ],
+    # a nearly noise-free CV model with a vague velocity start: close to the efficient
+    # (batch) estimator of a straight-line target
+    "evaluate": {"ekf": {"q": 1e-6, "initial_speed_sigma_mps": 1000.0}},
+}
+
+
+def test_ekf_attains_the_cv_position_crb():
+    sc = parse_scenario(CV, "cv.toml")
+    crb = position_crb(sc)
+    assert crb is not None and crb.shape == (1, 61)
+    assert np.isnan(crb[0, 0]) and np.all(np.isfinite(crb[0, 1:]))
+    assert np.all(np.diff(crb[0, 5:]) < 0)  # more plots, smaller bound (straight approach)
+    res = compare_methods(sc, ["ekf"], runs=100, seed=4)
+    (row,) = summarize(res, ["ekf"], skip=20, crb=crb)
+    assert 0.9 < row["rmse_over_crb"] < 1.1
+    assert row["failures"] == 0
+
+
+def test_unknown_method_in_evaluate_table_is_an_error():
+    doc = dict(CV, evaluate={"ekff": {"q": 1.0}})
+    with pytest.raises(ValueError, match=r"cv.toml: evaluate.ekff: no track method"):
+        compare_methods(parse_scenario(doc, "cv.toml"), ["ekf"], runs=1, seed=0)
+
+
+def test_position_crb_applies_only_to_cv_gaussian_scenarios():
+    assert position_crb(load_scenario(bundled_scenario("demo"))) is None  # manoeuvres
+    doc = dict(CV)
+    doc["sensors"] = [dict(CV["sensors"][0], epsilon=0.1, outlier_scale=10.0)]
+    assert position_crb(parse_scenario(doc, "eps.toml")) is None
+    assert position_crb(load_scenario(bundled_scenario("linear_cv"))) is not None
+
+
+def test_method_config_and_sensor_choice():
+    sc = load_scenario(bundled_scenario("demo"))
+    s = tracking_sensor(sc)
+    assert s.name == "radar"
+    cfg = method_config(sc, s, "ekf")
+    assert cfg["sigma_range_m"] == pytest.approx(25.0)
+    assert cfg["sigma_azimuth_deg"] == pytest.approx(0.4)
+    assert cfg["sigma_range_rate_mps"] == pytest.approx(1.0)
+    with pytest.raises(ValueError, match="passive"):
+        tracking_sensor(sc, "sonar")
+    with pytest.raises(ValueError, match="no active sensor"):
+        tracking_sensor(load_scenario(bundled_scenario("tma_classic")))
+    sc2 = parse_scenario(CV, "cv.toml")
+    assert method_config(sc2, tracking_sensor(sc2), "ekf")["q"] == 1e-6
+
+
+def test_unknown_auto_key_is_dropped_but_user_keys_and_failures_are_reported(monkeypatch):
+    import seatrack.filters.registry as registry
+
+    calls = []
+
+    def strict(plots, config):
+        calls.append(dict(config))
+        if "sigma_range_rate_mps" in config:
+            raise ValueError(
+                "strict: unknown config key 'sigma_range_rate_mps'; "
+                "known keys: q, sigma_azimuth_deg, sigma_range_m"
+            )
+        n = len(plots)
+        cols = {k: np.zeros(n) for k in registry.COMMON_COLUMNS}
+        cols.update(std_x_m=np.ones(n), std_y_m=np.ones(n), std_z_m=np.ones(n))
+        return cols
+
+    def broken(plots, config):
+        raise RuntimeError("boom")
+
+    monkeypatch.setattr(
+        registry, "get_method", lambda name: {"strict": strict, "broken": broken}[name]
+    )
+    sc = load_scenario(bundled_scenario("demo"))
+    s = tracking_sensor(sc)
+    data = sc.simulate(np.random.default_rng(0)).sensor("radar")
+    cfg = {m: method_config(sc, s, m) for m in ("strict", "broken")}
+    out = run_methods(data, ["strict", "broken"], cfg)
+    assert all(not r.error for r in out["strict"])
+    assert "sigma_range_rate_mps" not in calls[-1]
+    assert "sigma_range_m" in calls[-1] and "sigma_azimuth_deg" in calls[-1]
+    assert all(r.dropped == ("sigma_range_rate_mps",) for r in out["strict"])
+    assert len(calls) == len(data.measurements) + 1  # one retry, then the key stays dropped
+    assert all(r.error == "RuntimeError: boom" for r in out["broken"])
+    # a key the user set explicitly is not dropped: the method's error is reported
+    calls.clear()
+    out = run_methods(
+        data, ["strict"], cfg, user_keys={"strict": frozenset({"sigma_range_rate_mps"})}
+    )
+    assert all("unknown config key" in r.error for r in out["strict"])
+
+
+def test_summarize_statistics_by_hand():
+    runs, targets, scans = 4, 1, 5
+    pos = np.zeros((runs, targets, scans, 3))
+    pos[..., 0] = 3.0
+    pos[..., 1] = 4.0
+    std = np.full((runs, targets, scans, 3), 2.0)
+    vel = np.zeros_like(pos)
+    vel[..., 0] = 1.0
+    arrays = {
+        "m/pos_err": pos,
+        "m/vel_err": vel,
+        "m/std": std,
+        "m/seconds": np.full(runs, 0.01),
+        "m/plots": np.full(runs, 10),
+        "m/failed": np.zeros(runs, int),
+    }
+    (row,) = summarize(
+        MonteCarloResult(arrays, runs, 0), ["m"], skip=1, crb=np.full((1, scans), 2.5)
+    )
+    assert row["pos_rmse_m"] == pytest.approx(5.0)
+    assert row["vel_rmse_mps"] == pytest.approx(1.0)
+    assert row["peak_pos_m"] == pytest.approx(5.0)
+    assert row["anees_x"] == pytest.approx(9 / 4) and row["anees_y"] == pytest.approx(16 / 4)
+    assert row["rmse_over_crb"] == pytest.approx(2.0)
+    assert row["us_per_plot"] == pytest.approx(1e3)
+    # 4-run 95 % bounds (1 dof) are [0.121, 2.786]: x (2.25) inside, y (4.0) outside
+    assert row["in_bounds_pct"] == pytest.approx(50.0)

@@ -1,0 +1,155 @@
+"""Uncertainty of a TMA solution in operator terms, and the Cramér–Rao bound.
+
+* :func:`operator_values` -- position, range, bearing, course and speed at a time, with
+  their analytic Jacobian w.r.t. the state ``beta`` (spec "Output in operator terms");
+  the covariance of those values is ``G P G^T`` (first-order propagation).
+* :func:`crb` -- the Cramér–Rao bound of ``beta`` for a given true trajectory and
+  measurement times: ``(J^T W J)^-1`` at the true state (spec "Beyond the patent": for
+  Gaussian bearing noise this is the CRLB of the batch problem), via
+  :func:`seatrack.evaluate.bounds.fisher_crb`.
+* :func:`position_crb` -- that bound mapped to the target position at a time.
+* :func:`ellipse` -- semi-axes and orientation of a confidence ellipse.
+
+Conventions: x East, y North; bearings and courses in radians clockwise from North.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+from scipy.stats import chi2
+
+from seatrack.evaluate.bounds import fisher_crb
+from seatrack.geometry import bearing, course_speed
+from seatrack.models.measurement import bearing_jacobian
+from seatrack.tma.legs import leg_index, leg_starts, leg_time_matrix, position_map
+
+FloatArray = NDArray[np.float64]
+
+__all__ = ["OPERATOR_NAMES", "operator_values", "crb", "position_crb", "ellipse"]
+
+#: order of the values returned by :func:`operator_values`
+OPERATOR_NAMES = ("x", "y", "range", "bearing", "course", "speed")
+
+
+def operator_values(
+    beta: ArrayLike, starts: ArrayLike, t: float, observer: ArrayLike
+) -> tuple[FloatArray, FloatArray]:
+    """Target ``(x, y, range, bearing, course, speed)`` at time ``t`` and their Jacobian.
+
+    Parameters
+    ----------
+    beta : (n,) state ``(X0, Y0, Vx0, Vy0, Vx1, Vy1, ...)`` (spec layout).
+    starts : (L,) leg start times (s); ``starts[0]`` is the reference time ``t0``.
+    t : float, s.
+    observer : (2,) observer position (m) at ``t`` (for range and bearing).
+
+    Returns
+    -------
+    values : (6,) -- m, m, m, rad [0, 2 pi), rad [0, 2 pi), m/s
+    G : (6, n) -- d(values)/d(beta); angle rows are the derivatives of the unwrapped angle.
+    """
+    b = np.asarray(beta, dtype=float)
+    s = np.asarray(starts, dtype=float)
+    c = leg_time_matrix(np.array([t]), s)[0]
+    M = position_map(c)
+    B = b.reshape(-1, 2)
+    p = c @ B
+    d = p - np.asarray(observer, dtype=float)[:2]
+    rng = float(np.hypot(d[0], d[1]))
+    j = 1 + int(leg_index(t, s))
+    v = B[j]
+    crs, spd = course_speed(v[0], v[1])
+    n = b.size
+    G = np.zeros((6, n))
+    G[0:2] = M
+    G[2] = (d / rng) @ M
+    G[3] = bearing_jacobian(d) @ M
+    G[4, 2 * j : 2 * j + 2] = bearing_jacobian(v)
+    G[5, 2 * j : 2 * j + 2] = v / spd
+    values = np.array([p[0], p[1], rng, bearing(d[0], d[1]), crs, spd])
+    return values, G
+
+
+def crb(
+    state: ArrayLike,
+    times: ArrayLike,
+    observer: ArrayLike,
+    sigma: float | ArrayLike,
+    manoeuvres: Sequence[float] | ArrayLike = (),
+    support: Sequence[object] = (),
+    support_residual: str = "linear",
+) -> FloatArray:
+    """Cramér–Rao bound of the TMA state for a true trajectory and measurement times.
+
+    Parameters
+    ----------
+    state : (n,) true ``beta`` (spec layout), reference time ``t0 = times[0]``.
+    times : (N,) s, bearing times.
+    observer : (N, 2) m, observer positions.
+    sigma : float or (N,) rad, bearing standard deviation(s).
+    manoeuvres : leg start times after ``t0`` (s).
+    support : sequence of :class:`~seatrack.tma.support.SupportValue` (their information is
+        included with the same weights as in the solver).
+    support_residual : "linear" or "square" (the bound is the same to first order).
+
+    Returns
+    -------
+    (n, n) bound ``(J^T W J)^-1`` at the true state.
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        If the Fisher information is singular (unobservable geometry).
+    """
+    from seatrack.tma.solver import TMAConfig, _Problem
+
+    t = np.asarray(times, dtype=float)
+    obs = np.asarray(observer, dtype=float)[:, :2]
+    sig = np.broadcast_to(np.asarray(sigma, dtype=float), t.shape)
+    from seatrack.tma.solver import Bearings
+
+    b = np.asarray(state, dtype=float)
+    starts = leg_starts(float(t[0]), manoeuvres)
+    if b.size != 2 + 2 * starts.size:
+        raise ValueError(
+            f"state has {b.size} components; {starts.size} legs need {2 + 2 * starts.size}"
+        )
+    # noise-free bearings from the true state: the Jacobian does not depend on z
+    C = leg_time_matrix(t, starts)
+    p = C @ b.reshape(-1, 2)
+    z = bearing(p[:, 0] - obs[:, 0], p[:, 1] - obs[:, 1])
+    prob = _Problem.build(
+        Bearings(t, np.asarray(z), obs, np.array(sig)),
+        list(support),  # type: ignore[arg-type]
+        starts,
+        TMAConfig(support_residual=support_residual),
+    )
+    _, J = prob.evaluate(b)
+    return fisher_crb(J, prob.weights)
+
+
+def position_crb(bound: ArrayLike, starts: ArrayLike, t: float) -> FloatArray:
+    """Map a state covariance/bound ``(n, n)`` to the target position at time ``t`` (2, 2).
+
+    Position is linear in ``beta`` (``p(t) = M(t) beta``), so the map is exact: ``M P M^T``.
+    """
+    M = position_map(leg_time_matrix(np.array([t]), np.asarray(starts, dtype=float))[0])
+    P = np.asarray(bound, dtype=float)
+    return M @ P @ M.T
+
+
+def ellipse(cov: ArrayLike, p: float = 0.95) -> tuple[float, float, float]:
+    """Confidence ellipse of a 2-D Gaussian: ``(semi_major, semi_minor, orientation)``.
+
+    ``orientation`` is the direction of the major axis in radians clockwise from North,
+    in ``[0, pi)``; the axes are scaled by ``sqrt(chi2.ppf(p, 2))``.
+    """
+    P = np.asarray(cov, dtype=float)
+    w, V = np.linalg.eigh(0.5 * (P + P.T))
+    k = float(np.sqrt(chi2.ppf(p, 2)))
+    major = V[:, 1]
+    ori = float(np.mod(bearing(major[0], major[1]), np.pi))
+    return k * float(np.sqrt(max(w[1], 0.0))), k * float(np.sqrt(max(w[0], 0.0))), ori

@@ -1,0 +1,219 @@
+"""BEARINGS.csv / SUPPORT.csv readers and the RESULT.json writer of ``seatrack tma``.
+
+File formats (issue 3; header names exact, extra columns allowed)
+-----------------------------------------------------------------
+BEARINGS.csv: ``contact`` (optional; default one contact ``"1"``), ``time_s``,
+``bearing_deg`` (true, clockwise from North, in [0, 360)), ``observer_x_m``,
+``observer_y_m`` (East, North), optional ``sigma_deg`` (empty cell = the default sigma).
+Times strictly increasing per contact; at least 2 bearings per contact.
+
+SUPPORT.csv: ``contact`` (optional), ``kind`` (range | speed | course), ``time_s``,
+``value`` (m, m/s or deg), ``sigma`` (same unit), ``observer_x_m``, ``observer_y_m``
+(required for a range; optional columns otherwise).
+
+RESULT.json: an object keyed by contact id; see :func:`solution_to_dict`.
+
+Every error names the file, the line (header = line 1) and the problem.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from seatrack.geometry import bearing_rad_to_deg, deg2rad
+from seatrack.io.table import InputError, check_times, read_csv_table
+from seatrack.tma.bounds import ellipse
+from seatrack.tma.solver import Bearings, TMASolution
+from seatrack.tma.support import KINDS, SupportValue
+
+__all__ = ["DEFAULT_CONTACT", "read_bearings", "read_support", "solution_to_dict"]
+
+#: contact id used when BEARINGS.csv / SUPPORT.csv have no ``contact`` column
+DEFAULT_CONTACT = "1"
+
+
+def _contacts(table: Any, path: str) -> np.ndarray:
+    if "contact" not in table:
+        return np.full(len(table), DEFAULT_CONTACT)
+    c = table["contact"]
+    empty = np.flatnonzero(c == "")
+    if empty.size:
+        raise InputError(f"{path}, line {table.lines[empty[0]]}: column contact is empty")
+    return np.asarray(c)
+
+
+def read_bearings(
+    path: str | Path, default_sigma: float = math.radians(1.0)
+) -> dict[str, Bearings]:
+    """Read BEARINGS.csv into one :class:`Bearings` per contact (radians inside).
+
+    Empty ``sigma_deg`` cells take ``default_sigma`` (rad); without the column the
+    bearings carry no sigma (the solver's ``sigma`` applies).
+
+    Raises
+    ------
+    InputError
+        Missing columns, non-numeric / NaN / infinite cells, bearings outside [0, 360),
+        non-positive sigma, unsorted or duplicate times, a contact with a single bearing.
+    """
+    p = str(path)
+    tab = read_csv_table(
+        path,
+        required=["time_s", "bearing_deg", "observer_x_m", "observer_y_m"],
+        optional=["contact", "sigma_deg"],
+        text=["contact"],
+    )
+    cid = _contacts(tab, p)
+    b = tab["bearing_deg"]
+    bad = np.flatnonzero((b < 0) | (b >= 360))
+    if bad.size:
+        i = bad[0]
+        raise InputError(f"{p}, line {tab.lines[i]}: bearing_deg = {b[i]:g} is outside [0, 360)")
+    sig = tab["sigma_deg"] if "sigma_deg" in tab else np.full(len(tab), np.nan)
+    bad = np.flatnonzero(sig <= 0)
+    if bad.size:
+        i = bad[0]
+        raise InputError(f"{p}, line {tab.lines[i]}: sigma_deg = {sig[i]:g} must be positive")
+    tab.columns["contact"] = cid
+    check_times(tab, "time_s", group="contact", strict=True)
+    out: dict[str, Bearings] = {}
+    for c in dict.fromkeys(cid.tolist()):
+        m = cid == c
+        if m.sum() < 2:
+            raise InputError(
+                f"{p}, line {tab.lines[m][0]}: contact {c!r} has a single bearing; "
+                "TMA needs at least 2"
+            )
+        s = sig[m]
+        out[c] = Bearings(
+            tab["time_s"][m],
+            np.asarray(deg2rad(b[m])),
+            np.stack([tab["observer_x_m"][m], tab["observer_y_m"][m]], axis=1),
+            None if "sigma_deg" not in tab else np.where(np.isnan(s), default_sigma, deg2rad(s)),
+        )
+    return out
+
+
+def read_support(path: str | Path) -> dict[str, list[SupportValue]]:
+    """Read SUPPORT.csv into support values per contact (SI units, radians inside)."""
+    p = str(path)
+    tab = read_csv_table(
+        path,
+        required=["kind", "time_s", "value", "sigma"],
+        optional=["contact", "observer_x_m", "observer_y_m"],
+        text=["contact", "kind"],
+    )
+    cid = _contacts(tab, p)
+    ox = tab["observer_x_m"] if "observer_x_m" in tab else np.full(len(tab), np.nan)
+    oy = tab["observer_y_m"] if "observer_y_m" in tab else np.full(len(tab), np.nan)
+    out: dict[str, list[SupportValue]] = {}
+    for i in range(len(tab)):
+        line = tab.lines[i]
+        kind = str(tab["kind"][i]).strip().lower()
+        val, sig, t = float(tab["value"][i]), float(tab["sigma"][i]), float(tab["time_s"][i])
+        where = f"{p}, line {line}"
+        if kind not in KINDS:
+            raise InputError(
+                f"{where}: kind = {str(tab['kind'][i])!r}; use one of {', '.join(KINDS)}"
+            )
+        if sig <= 0:
+            raise InputError(f"{where}: sigma = {sig:g} must be positive")
+        obs = None
+        if kind == "range":
+            if not (math.isfinite(ox[i]) and math.isfinite(oy[i])):
+                raise InputError(
+                    f"{where}: a range support value needs observer_x_m and observer_y_m"
+                )
+            obs = (float(ox[i]), float(oy[i]))
+            if val <= 0:
+                raise InputError(f"{where}: range value = {val:g} must be positive")
+        elif kind == "speed":
+            if val <= 0:
+                raise InputError(f"{where}: speed value = {val:g} must be positive")
+        else:
+            if not 0 <= val < 360:
+                raise InputError(f"{where}: course value = {val:g} is outside [0, 360)")
+            val, sig = math.radians(val), math.radians(sig)
+        out.setdefault(str(cid[i]), []).append(SupportValue(kind, t, val, sig, obs))
+    return out
+
+
+def _num(x: Any) -> float | None:
+    v = float(x)
+    return v if math.isfinite(v) else None
+
+
+def solution_to_dict(sol: TMASolution) -> dict[str, Any]:
+    """RESULT.json entry of one contact (degrees and SI units; ``null`` = not determined).
+
+    Fields: ``t0_s``; ``x_m, y_m, vx_mps, vy_mps`` (target at ``t0``, first leg); ``legs``
+    (``start_s, vx_mps, vy_mps``); ``covariance`` with ``state_order``; ``last`` (time,
+    position, range, bearing, course, speed, their 1-sigma and half-widths of the
+    ``confidence`` interval, and the position ellipse); ``iterations``, ``converged``,
+    ``observable``, ``condition_number``, ``smallest_singular_value``,
+    ``residual_rms_deg``, ``cost``, ``manoeuvres_s``, ``manoeuvres_detected``,
+    ``warnings``. When not observable every range-dependent number is ``null``.
+    """
+    ok = sol.observable
+    B = sol.state.reshape(-1, 2)
+    L = sol.last
+    zf = L.z_factor
+    order = ["x_m", "y_m"] + [f"{c}{j}_mps" for j in range(B.shape[0] - 1) for c in ("vx", "vy")]
+
+    def val(x: float) -> float | None:
+        return _num(x) if ok else None
+
+    last: dict[str, Any] = {
+        "time_s": L.time,
+        "x_m": _num(L.x),
+        "y_m": _num(L.y),
+        "range_m": _num(L.range),
+        "bearing_deg": _num(bearing_rad_to_deg(L.bearing)),
+        "course_deg": _num(bearing_rad_to_deg(L.course)) if ok else None,
+        "speed_mps": _num(L.speed),
+        "sigma_x_m": _num(L.sigma_x),
+        "sigma_y_m": _num(L.sigma_y),
+        "sigma_range_m": _num(L.sigma_range),
+        "sigma_bearing_deg": _num(math.degrees(L.sigma_bearing)),
+        "sigma_course_deg": _num(math.degrees(L.sigma_course)),
+        "sigma_speed_mps": _num(L.sigma_speed),
+        "confidence": L.confidence,
+        "range_m_halfwidth": _num(zf * L.sigma_range),
+        "bearing_deg_halfwidth": _num(zf * math.degrees(L.sigma_bearing)),
+        "course_deg_halfwidth": _num(zf * math.degrees(L.sigma_course)),
+        "speed_mps_halfwidth": _num(zf * L.sigma_speed),
+        "ellipse": None,
+    }
+    if ok:
+        a, b, o = ellipse(L.position_covariance, L.confidence)
+        last["ellipse"] = {"semi_major_m": a, "semi_minor_m": b, "orientation_deg": math.degrees(o)}
+    return {
+        "t0_s": sol.t0,
+        "x_m": val(B[0, 0]),
+        "y_m": val(B[0, 1]),
+        "vx_mps": val(B[1, 0]),
+        "vy_mps": val(B[1, 1]),
+        "legs": [
+            {"start_s": float(s), "vx_mps": val(B[1 + j, 0]), "vy_mps": val(B[1 + j, 1])}
+            for j, s in enumerate(sol.starts)
+        ],
+        "state_order": order,
+        "covariance": [[_num(v) for v in row] for row in sol.covariance] if ok else None,
+        "last": last,
+        "iterations": sol.iterations,
+        "converged": sol.converged,
+        "observable": ok,
+        "condition_number": _num(sol.condition_number),
+        "smallest_singular_value": _num(sol.smallest_singular_value),
+        "residual_rms_deg": math.degrees(sol.residual_rms),
+        "cost": sol.cost,
+        "n_bearings": sol.n_bearings,
+        "n_support": sol.n_support,
+        "manoeuvres_s": [float(m) for m in sol.manoeuvres],
+        "manoeuvres_detected": sol.manoeuvres_detected,
+        "warnings": list(sol.warnings),
+    }

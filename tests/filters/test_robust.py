@@ -340,6 +340,25 @@ def test_config_mapping_rejects_unknown_keys_and_converts_degrees() -> None:
         config_from_mapping({"sigma_bearing": 0.1, "sigma_bearing_deg": 2.0}, SonarModel)
 
 
+def test_config_mapping_accepts_the_common_track_keys() -> None:
+    from seatrack.filters.robust import config_from_mapping
+
+    model, _ = config_from_mapping(
+        {
+            "sigma_range_m": 20.0,
+            "sigma_azimuth_deg": 0.5,
+            "sigma_elevation_deg": 0.3,  # 2-D filter: accepted and ignored
+            "sigma_range_rate_mps": 1.0,  # no range rate in this filter: ignored
+        },
+        SonarModel,
+        RobustConfig,
+    )
+    assert model.sigma_range == 20.0
+    assert model.sigma_bearing == pytest.approx(np.deg2rad(0.5))
+    with pytest.raises(ValueError, match="not both"):
+        config_from_mapping({"sigma_range_m": 2.0, "sigma_range": 2.0}, SonarModel)
+
+
 def test_robust_gain_switch_of_algorithm_a() -> None:
     """[reading] robust_gain=False: A uses the nominal q0 in its gain, so it follows outliers."""
     runs = simulate_runs(MarineScenario(steps=40), 3, 0.0, np.random.default_rng(12))

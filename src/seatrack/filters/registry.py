@@ -5,6 +5,10 @@ returning output columns with one value per plot (the common ones ``x_m``, ``y_m
 ``z_m``, ``vx_mps``, ``vy_mps``, ``vz_mps``, ``std_x_m``, ``std_y_m``, ``std_z_m`` plus
 method-specific ones). Methods are imported lazily by module path so that ``--help`` stays
 fast and a method's dependencies load only when it runs.
+
+Every method accepts the measurement-noise keys of :data:`COMMON_CONFIG_KEYS` in its
+configuration (ignoring those it has no use for), so one configuration describing the
+sensor drives any method; method-specific keys are documented by each runner.
 """
 
 from __future__ import annotations
@@ -64,6 +68,15 @@ METHODS: dict[str, tuple[str, str, str]] = {
         "standard IMM, CV + coordinated turn",
     ),
 }
+
+#: configuration keys every method accepts (and uses where it has such a measurement):
+#: the measurement noise of the plots, in the units the names say
+COMMON_CONFIG_KEYS = (
+    "sigma_range_m",
+    "sigma_azimuth_deg",
+    "sigma_elevation_deg",
+    "sigma_range_rate_mps",
+)
 
 COMMON_COLUMNS = (
     "x_m",

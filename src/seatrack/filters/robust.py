@@ -624,26 +624,42 @@ def config_from_mapping(config: Mapping[str, Any], *classes: type) -> list[Any]:
     """Build one configuration dataclass per class from a flat mapping (a TOML table).
 
     Keys are the field names of the classes; ``sigma_bearing_deg`` (degrees, at the edge)
-    is accepted for ``sigma_bearing``. Unknown keys raise ValueError naming them and the
+    is accepted for ``sigma_bearing``. The track-method keys shared by every method
+    (:data:`seatrack.filters.registry.COMMON_CONFIG_KEYS`) are accepted too:
+    ``sigma_range_m`` sets ``sigma_range`` and ``sigma_azimuth_deg`` sets ``sigma_bearing``;
+    ``sigma_elevation_deg`` and ``sigma_range_rate_mps`` are ignored (these filters are
+    2-D and do not use range rate). Unknown keys raise ValueError naming them and the
     valid ones; bad values raise the dataclasses' own ValueError.
     """
+    from seatrack.filters.registry import COMMON_CONFIG_KEYS
+
+    cfg = dict(config)
+    aliases = {"sigma_range_m": "sigma_range", "sigma_azimuth_deg": "sigma_bearing_deg"}
+    for common, own in aliases.items():
+        if common in cfg:
+            value = cfg.pop(common)
+            if own in cfg or (own == "sigma_bearing_deg" and "sigma_bearing" in cfg):
+                raise ValueError(f"give {common} or {own}, not both")
+            cfg[own] = value
+    for key in COMMON_CONFIG_KEYS:
+        cfg.pop(key, None)
     names = [{f.name for f in fields(cls)} for cls in classes]
     valid = set().union(*names)
     if "sigma_bearing" in valid:
         valid.add("sigma_bearing_deg")
-    unknown = sorted(set(config) - valid)
+    unknown = sorted(set(cfg) - valid)
     if unknown:
         raise ValueError(
             f"unknown configuration key(s) {', '.join(unknown)}; "
-            f"valid keys: {', '.join(sorted(valid))}"
+            f"valid keys: {', '.join(sorted(valid | set(COMMON_CONFIG_KEYS)))}"
         )
     out = []
     for cls, nm in zip(classes, names, strict=True):
-        kw = {key: config[key] for key in nm if key in config}
-        if "sigma_bearing" in nm and "sigma_bearing_deg" in config:
-            if "sigma_bearing" in config:
+        kw = {key: cfg[key] for key in nm if key in cfg}
+        if "sigma_bearing" in nm and "sigma_bearing_deg" in cfg:
+            if "sigma_bearing" in cfg:
                 raise ValueError("give sigma_bearing (rad) or sigma_bearing_deg, not both")
-            kw["sigma_bearing"] = float(np.deg2rad(float(config["sigma_bearing_deg"])))
+            kw["sigma_bearing"] = float(np.deg2rad(float(cfg["sigma_bearing_deg"])))
         try:
             out.append(cls(**kw))
         except TypeError as exc:  # e.g. a string where a number is expected

@@ -1,22 +1,18 @@
+from dataclasses import replace
+
 import numpy as np
 
 from seatrack.filters.ekf import run_ekf, track_plots
-from seatrack.io.plots import PlotTrack
+from seatrack.io.measurements_csv import plots_from_measurements
 from seatrack.simulate import Leg, NoiseModel, observe, trajectory
 
 
 def _plots(meas, with_el=True, with_rr=True):
-    c = list(meas.components)
-    return PlotTrack(
-        track="1",
-        t=meas.t,
-        range=meas.z[:, c.index("range")],
-        azimuth=meas.z[:, c.index("azimuth")],
-        elevation=meas.z[:, c.index("elevation")] if with_el else None,
-        range_rate=meas.z[:, c.index("range_rate")] if with_rr else None,
-        sensor=meas.sensor_pos,
-        sensor_vel=meas.sensor_vel,
-        lines=np.arange(meas.t.size) + 2,
+    pt = plots_from_measurements(meas)
+    return replace(
+        pt,
+        elevation=pt.elevation if with_el else None,
+        range_rate=pt.range_rate if with_rr else None,
     )
 
 

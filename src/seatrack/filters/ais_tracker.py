@@ -1,0 +1,1105 @@
+"""Robust coordinated-turn tracker for AIS position reports of many vessels at once.
+
+Per vessel, a coordinated-turn extended Kalman filter (state ``[x, y, vx, vy, w]``, x East,
+y North in the vessel's local tangent plane, turn rate ``w`` clockwise positive,
+:mod:`seatrack.models.motion`) runs over the vessel's reports in time order, followed by a
+Rauch-Tung-Striebel (RTS) smoother over each track segment (Bar-Shalom, Li & Kirubarajan
+2001: 5.4.2 gating, 8.6 smoothing, 11.7 CT model). Measurements: the position, then (when
+both are reported) SOG and COG as a velocity measurement ``[|v|, atan2(vx, vy)]``
+(:func:`sogcog_model`, COG innovation wrapped to ``(-pi, pi]``, own chi-square gate).
+
+Outliers. Three kinds (:data:`OUTLIER_KINDS`), each a report that is not used (the filter
+predicts through it) and is flagged:
+
+1. **implausible jump**: outside the chi-square gate (``NIS = y^T S^-1 y`` against the
+   ``gate_probability`` quantile of chi-square with 2 dof) *and* physically implausible:
+   the speed implied by the straight line from the last accepted report exceeds
+   ``max_speed_kn``, or the acceleration implied by its distance from the prediction,
+   ``2 (|y| - n_sigma sqrt(lambda_max(S))) / dt^2``, exceeds ``max_accel_mps2``.
+   Intervals are lengthened by ``time_resolution_s`` (one-second timestamps can hide up
+   to one second) and distances shortened by the noise allowance
+   ``n_sigma sqrt(2) sigma_pos`` [reading], so only reports implausible under the most
+   generous reading are flagged;
+2. **stale position**: the exact position of the previous report repeated while the vessel
+   moves (reported SOG, or the filter speed less ``n_sigma`` of its sigma) far enough since
+   the position was first reported to exceed the noise allowance -- the "frozen position"
+   glitch of AIS feeds, whose catch-up report otherwise looks like a jump;
+3. **implausible after gap**: after a gap longer than ``max_gap_s``, a report implying more
+   than ``max_speed_kn`` from the last accepted one (e.g. two transmitters sharing an
+   MMSI); it has no track estimate.
+
+A report outside the gate that is plausible is a manoeuvre: the predicted covariance is
+inflated by ``NIS / gate`` before the update (so the report sits on the gate), which lets
+the track follow sharp turns and speed changes without a second model [reading]. The causal
+decisions are then revisited with the future (``revisit_passes``): an outlier that is
+plausible against its accepted neighbours on both sides is accepted, an accepted report
+that is implausible against them is rejected (:func:`neighbour_plausibility`), and the
+vessels concerned are filtered again.
+
+Tracks are split (re-initialised) at intervals longer than ``max_gap_s`` and after
+``reinit_after`` consecutive outliers (the track was lost, e.g. after a wrong first
+report). A segment is initialised from one report: its position, and the velocity from
+SOG/COG when both are given (else zero with a wide prior).
+
+Scale: all vessels go through one compiled (Numba, ``nogil``) loop over reports sorted by
+vessel and time; there is no Python work per report. The measurement updates are the
+Joseph-form core of :mod:`seatrack.kalman` and the covariance prediction its compiled
+``F P F^T + Q`` core; the CT propagation ``f(x)``, its Jacobian and ``Q`` are compiled
+copies of :func:`seatrack.models.motion.ct_transition`,
+:func:`~seatrack.models.motion.ct_jacobian` and :func:`~seatrack.models.motion.ct_noise`
+(tested equal to them), and the RTS step is written out for 5x5 matrices (no BLAS calls).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numba import njit
+from numpy.typing import ArrayLike, NDArray
+from scipy.stats import chi2
+
+from seatrack.geometry import KNOT_MPS, bearing, wrap_2pi
+from seatrack.kalman import _predict_core, _update_core, _wrap
+
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "AisTrackerConfig",
+    "TrackStates",
+    "AisTracks",
+    "track_vessels",
+    "track_reports",
+    "ct_step",
+    "sogcog_model",
+    "OUTLIER_KINDS",
+    "neighbour_plausibility",
+]
+
+NX = 5  # [x, y, vx, vy, w]
+
+
+@dataclass(frozen=True)
+class AisTrackerConfig:
+    """Configuration of the AIS tracker (SI inside; knots/degrees only where named so).
+
+    Parameters
+    ----------
+    sigma_pos_m : float
+        1-sigma AIS position error per axis, m [reading: GNSS noise plus the 1e-4 deg
+        quantisation of some feeds].
+    q_accel : float
+        White-noise acceleration PSD of the CT model, m^2/s^3.
+    q_turn : float
+        Turn-rate random-walk PSD, rad^2/s^3.
+    gate_probability : float
+        Chi-square (2 dof) gate probability.
+    max_speed_kn : float
+        Largest plausible speed over ground, knots [reading].
+    max_accel_mps2 : float
+        Largest plausible acceleration (incl. centripetal), m/s^2 [reading].
+    n_sigma : float
+        Noise allowance (in sigmas) in the plausibility tests.
+    time_resolution_s : float
+        Timestamp resolution; implied rates use ``dt + time_resolution_s``.
+    max_gap_s : float
+        Longer intervals split the track.
+    reinit_after : int
+        Consecutive outliers after which the track is re-initialised at the last one.
+    smooth : bool
+        Run the RTS smoother (else output the forward filter).
+    revisit_passes : int
+        Passes revisiting the causal decisions with the two-sided neighbour test
+        (:func:`neighbour_plausibility`, neighbours = the reports accepted so far): an
+        outlier (kinds 1, 3) that is plausible on both sides is accepted and an accepted
+        report that is implausible is rejected (kind 1); each report's decision is revised
+        at most once. Each pass re-runs the filter on the vessels concerned; 0 = causal
+        decisions only.
+    init_speed_std_mps : float
+        Prior velocity sigma per axis when SOG/COG are not both known.
+    init_sogcog_std_mps : float
+        Prior velocity sigma per axis when the velocity comes from SOG/COG.
+    init_turn_std_dps : float
+        Prior turn-rate sigma, deg/s.
+    use_sog_cog : bool
+        Also update with the reported SOG and COG (velocity measurements, see
+        :func:`sogcog_model`) after an accepted position, when both are known; only when
+        the reported and the predicted speed
+        exceed ``min_speed_kn`` (COG is noise, and the speed Jacobian singular, near rest).
+        A SOG/COG pair outside the chi-square gate is not used (the position still is).
+    use_sog_alone : bool
+        Also use SOG when COG is missing (a 1-D speed update). Off by default: on the
+        Danish files without COG it made the hold-out error worse (their SOG lags the
+        positions during speed changes) [reading].
+    sigma_sog_kn, sigma_cog_deg : float
+        1-sigma of the reported SOG (kn) and COG (deg) [reading: 0.1 kn / 0.1 deg
+        resolution plus GNSS velocity noise and the lag of its smoothing].
+    min_speed_kn : float
+        Speed below which SOG/COG are not used, kn.
+    """
+
+    sigma_pos_m: float = 5.0
+    q_accel: float = 0.05
+    q_turn: float = 2e-6
+    gate_probability: float = 0.9999
+    max_speed_kn: float = 50.0
+    max_accel_mps2: float = 2.0
+    n_sigma: float = 3.0
+    time_resolution_s: float = 1.0
+    max_gap_s: float = 600.0
+    reinit_after: int = 3
+    smooth: bool = True
+    revisit_passes: int = 4
+    init_speed_std_mps: float = 8.0
+    init_sogcog_std_mps: float = 1.0
+    init_turn_std_dps: float = 1.0
+    use_sog_cog: bool = True
+    use_sog_alone: bool = False
+    sigma_sog_kn: float = 0.3
+    sigma_cog_deg: float = 3.0
+    min_speed_kn: float = 2.0
+
+    def __post_init__(self) -> None:
+        for name in ("sigma_pos_m", "q_accel", "q_turn", "max_speed_kn", "max_accel_mps2"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"AisTrackerConfig.{name} must be > 0, got {getattr(self, name)}")
+        if not 0.0 < self.gate_probability < 1.0:
+            raise ValueError(f"gate_probability must be in (0, 1), got {self.gate_probability}")
+        if self.reinit_after < 1:
+            raise ValueError(f"reinit_after must be >= 1, got {self.reinit_after}")
+
+    @property
+    def gate(self) -> float:
+        """Chi-square (2 dof) threshold of the gate."""
+        return float(chi2.ppf(self.gate_probability, 2))
+
+
+# ---------------------------------------------------------------------------
+# Compiled coordinated-turn step (mirror of seatrack.models.motion, tested equal)
+# ---------------------------------------------------------------------------
+@njit(cache=True)
+def _ct_f_F(x, dt, fx, F):  # pragma: no cover - compiled
+    """CT propagation ``fx = f(x, dt)`` and Jacobian ``F`` (see ``motion.ct_transition``)."""
+    vx, vy, w = x[2], x[3], x[4]
+    wt = w * dt
+    s, c = math.sin(wt), math.cos(wt)
+    if abs(wt) < 1e-3:
+        t2, t3, t4, t5 = dt * dt, dt**3, dt**4, dt**5
+        a = dt - w * w * t3 / 6 + w**4 * t5 / 120
+        b = w * t2 / 2 - w**3 * t4 / 24
+        da = -w * t3 / 3 + w**3 * t5 / 30
+        db = t2 / 2 - w * w * t4 / 8 + w**4 * dt**6 / 144
+    else:
+        a = s / w
+        b = (1 - c) / w
+        da = dt * c / w - s / (w * w)
+        db = dt * s / w - (1 - c) / (w * w)
+    fx[0] = x[0] + a * vx + b * vy
+    fx[1] = x[1] - b * vx + a * vy
+    fx[2] = c * vx + s * vy
+    fx[3] = -s * vx + c * vy
+    fx[4] = w
+    for i in range(NX):
+        for j in range(NX):
+            F[i, j] = 1.0 if i == j else 0.0
+    F[0, 2] = a
+    F[0, 3] = b
+    F[0, 4] = da * vx + db * vy
+    F[1, 2] = -b
+    F[1, 3] = a
+    F[1, 4] = -db * vx + da * vy
+    F[2, 2] = c
+    F[2, 3] = s
+    F[2, 4] = dt * (-s * vx + c * vy)
+    F[3, 2] = -s
+    F[3, 3] = c
+    F[3, 4] = dt * (-c * vx - s * vy)
+
+
+@njit(cache=True)
+def _ct_Q(dt, q, q_w, Q):  # pragma: no cover - compiled
+    """CT process noise (see ``motion.ct_noise``): CV white-noise acceleration + w walk."""
+    for i in range(NX):
+        for j in range(NX):
+            Q[i, j] = 0.0
+    Q[0, 0] = Q[1, 1] = q * dt**3 / 3
+    Q[0, 2] = Q[2, 0] = Q[1, 3] = Q[3, 1] = q * dt**2 / 2
+    Q[2, 2] = Q[3, 3] = q * dt
+    Q[4, 4] = q_w * dt
+
+
+@njit(cache=True)
+def _sogcog(x, h, H):  # pragma: no cover - compiled
+    """Speed and course of the state's velocity and their Jacobian (rows: SOG, COG)."""
+    vx, vy = x[2], x[3]
+    s2 = vx * vx + vy * vy
+    s = math.sqrt(s2)
+    h[0] = s
+    h[1] = math.atan2(vx, vy)
+    for j in range(NX):
+        H[0, j] = 0.0
+        H[1, j] = 0.0
+    if s > 0.0:
+        H[0, 2] = vx / s
+        H[0, 3] = vy / s
+        H[1, 2] = vy / s2
+        H[1, 3] = -vx / s2
+
+
+def sogcog_model(x: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """SOG/COG measurement model ``h(x) = [|v|, atan2(vx, vy)]`` (m/s, rad clockwise from
+    North) and its analytic Jacobian ``(2, 5)`` -- the compiled function the tracker uses."""
+    xx = np.ascontiguousarray(x, dtype=np.float64)
+    h, H = np.empty(2), np.empty((2, NX))
+    _sogcog(xx, h, H)
+    return h, H
+
+
+def ct_step(x: ArrayLike, dt: float, q: float, q_turn: float) -> tuple[FloatArray, ...]:
+    """Compiled CT ``(f(x), F, Q)`` for one state; exposed to test it against the models."""
+    xx = np.asarray(x, dtype=np.float64)
+    fx, F, Q = np.empty(NX), np.empty((NX, NX)), np.empty((NX, NX))
+    _ct_f_F(xx, float(dt), fx, F)
+    _ct_Q(float(dt), q, q_turn, Q)
+    return fx, F, Q
+
+
+@njit(cache=True)
+def _derived(x, P, out_std):  # pragma: no cover - compiled
+    """1-sigma of x, y, speed, course and turn rate from the state covariance (linearised)."""
+    out_std[0] = math.sqrt(max(P[0, 0], 0.0))
+    out_std[1] = math.sqrt(max(P[1, 1], 0.0))
+    vx, vy = x[2], x[3]
+    s2 = vx * vx + vy * vy
+    if s2 > 1e-12:
+        s = math.sqrt(s2)
+        ux, uy = vx / s, vy / s
+        out_std[2] = math.sqrt(
+            max(ux * ux * P[2, 2] + 2 * ux * uy * P[2, 3] + uy * uy * P[3, 3], 0)
+        )
+        # course = atan2(vx, vy): d/dvx = vy/s^2, d/dvy = -vx/s^2
+        gx, gy = vy / s2, -vx / s2
+        out_std[3] = math.sqrt(
+            max(gx * gx * P[2, 2] + 2 * gx * gy * P[2, 3] + gy * gy * P[3, 3], 0)
+        )
+    else:
+        out_std[2] = math.sqrt(max(0.5 * (P[2, 2] + P[3, 3]), 0.0))
+        out_std[3] = math.pi  # course undefined at rest
+    out_std[4] = math.sqrt(max(P[4, 4], 0.0))
+
+
+@njit(cache=True)
+def _rts_step(xf, Pf, F, xp, Pp, xs_n, Ps_n, xs, Ps, A, L, X, D):  # pragma: no cover
+    """One RTS step (BLK 8.6): ``C = Pf F^T Pp^-1``, ``xs = xf + C (xs_n - xp)``,
+    ``Ps = Pf + C (Ps_n - Pp) C^T``; ``C^T`` solved from ``Pp C^T = F Pf`` by Cholesky.
+    Small fixed-size loops (no BLAS calls: 5x5 matrices)."""
+    n = NX
+    for i in range(n):  # A = F Pf
+        for j in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += F[i, k] * Pf[k, j]
+            A[i, j] = acc
+    for j in range(n):  # Pp = L L^T
+        d = Pp[j, j]
+        for k in range(j):
+            d -= L[j, k] * L[j, k]
+        d = math.sqrt(max(d, 1e-300))
+        L[j, j] = d
+        for i in range(j + 1, n):
+            acc = Pp[i, j]
+            for k in range(j):
+                acc -= L[i, k] * L[j, k]
+            L[i, j] = acc / d
+    for c in range(n):  # X = Pp^-1 A  (X = C^T)
+        for i in range(n):
+            acc = A[i, c]
+            for k in range(i):
+                acc -= L[i, k] * X[k, c]
+            X[i, c] = acc / L[i, i]
+        for i in range(n - 1, -1, -1):
+            acc = X[i, c]
+            for k in range(i + 1, n):
+                acc -= L[k, i] * X[k, c]
+            X[i, c] = acc / L[i, i]
+    for i in range(n):  # xs = xf + C (xs_n - xp),  C[i, k] = X[k, i]
+        acc = xf[i]
+        for k in range(n):
+            acc += X[k, i] * (xs_n[k] - xp[k])
+        xs[i] = acc
+    for i in range(n):  # D = C (Ps_n - Pp)
+        for j in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += X[k, i] * (Ps_n[k, j] - Pp[k, j])
+            D[i, j] = acc
+    for i in range(n):  # Ps = Pf + D C^T (symmetric)
+        for j in range(i, n):
+            acc = 0.0
+            for k in range(n):
+                acc += D[i, k] * X[k, j]
+            v = 0.5 * (Pf[i, j] + Pf[j, i]) + acc
+            Ps[i, j] = v
+            Ps[j, i] = v
+
+
+@njit(cache=True)
+def _smooth_segment(k0, k1, xp, Pp, Fk, xf, Pf, xs, Ps, has, smooth):  # pragma: no cover
+    """RTS smoother over the scratch rows ``k0..k1`` (inclusive) that have a state; the
+    next row of row ``k`` is the next one with a state (BLK 8.6)."""
+    kn = k1
+    while kn >= k0 and not has[kn]:
+        kn -= 1
+    if kn < k0:
+        return
+    xs[kn] = xf[kn]
+    Ps[kn] = Pf[kn]
+    A = np.empty((NX, NX))
+    L = np.zeros((NX, NX))
+    X = np.empty((NX, NX))
+    D = np.empty((NX, NX))
+    for k in range(kn - 1, k0 - 1, -1):
+        if not has[k]:
+            continue
+        if smooth:
+            _rts_step(
+                xf[k], Pf[k], Fk[kn], xp[kn], Pp[kn], xs[kn], Ps[kn], xs[k], Ps[k], A, L, X, D
+            )
+        else:
+            xs[k] = xf[k]
+            Ps[k] = Pf[k]
+        kn = k
+
+
+#: outlier kinds (``TrackStates.outlier_kind``); 0 = not an outlier
+OUTLIER_KINDS = {1: "implausible jump", 2: "stale position", 3: "implausible after gap"}
+
+
+@njit(cache=True)
+def _close(
+    k0, k1, a, xp, Pp, Fk, xf, Pf, xs, Ps, has, smooth, out_x, out_std, std
+):  # pragma: no cover
+    """Smooth scratch rows ``k0..k1`` (inclusive) of the vessel starting at row ``a``; write."""
+    if k1 < k0:
+        return
+    _smooth_segment(k0, k1, xp, Pp, Fk, xf, Pf, xs, Ps, has, smooth)
+    for kk in range(k0, k1 + 1):
+        if has[kk]:
+            r = a + kk
+            for j in range(NX):
+                out_x[r, j] = xs[kk, j]
+            _derived(xs[kk], Ps[kk], std)
+            for j in range(NX):
+                out_std[r, j] = std[j]
+
+
+@njit(cache=True)
+def _init_at(
+    k, z, v0, known, v_std, v_std_known, sigma_pos, w_std, xp, Pp, Fk, xf, Pf
+):  # pragma: no cover
+    """Initialise a segment in scratch row ``k`` from one report: position ``z``, velocity
+    ``v0`` (from SOG/COG) if ``known`` else zero, with the matching prior sigmas."""
+    vx = v0[0] if known else 0.0
+    vy = v0[1] if known else 0.0
+    sv = v_std_known if known else v_std
+    for j in range(NX):
+        xf[k, j] = 0.0
+        for jj in range(NX):
+            Pf[k, j, jj] = 0.0
+            Fk[k, j, jj] = 1.0 if j == jj else 0.0
+    xf[k, 0] = z[0]
+    xf[k, 1] = z[1]
+    xf[k, 2] = vx
+    xf[k, 3] = vy
+    Pf[k, 0, 0] = Pf[k, 1, 1] = sigma_pos * sigma_pos
+    Pf[k, 2, 2] = Pf[k, 3, 3] = sv * sv
+    Pf[k, 4, 4] = w_std * w_std
+    xp[k] = xf[k]
+    Pp[k] = Pf[k]
+
+
+@njit(cache=True, nogil=True)
+def _track_kernel(
+    starts,
+    t,
+    z,
+    use,
+    force,
+    v0,
+    v0_known,
+    sog,
+    cog,
+    use_vel,
+    use_sog_alone,
+    sigma_sog,
+    sigma_cog,
+    vmin,
+    sigma_pos,
+    q,
+    q_w,
+    gate,
+    vmax,
+    amax,
+    nsig,
+    tres,
+    max_gap,
+    reinit_after,
+    init_v_std,
+    init_v_std_known,
+    init_w_std,
+    smooth,
+    out_x,
+    out_std,
+    out_flag,
+    out_seg,
+    out_nis,
+):  # pragma: no cover - compiled
+    n_vessels = starts.shape[0] - 1
+    L = 1
+    for v in range(n_vessels):
+        L = max(L, starts[v + 1] - starts[v])
+    xp = np.zeros((L, NX))
+    Pp = np.zeros((L, NX, NX))
+    Fk = np.zeros((L, NX, NX))
+    xf = np.zeros((L, NX))
+    Pf = np.zeros((L, NX, NX))
+    xs = np.zeros((L, NX))
+    Ps = np.zeros((L, NX, NX))
+    has = np.zeros(L, dtype=np.bool_)
+    fx = np.empty(NX)
+    F = np.empty((NX, NX))
+    Q = np.empty((NX, NX))
+    H = np.zeros((2, NX))
+    H[0, 0] = 1.0
+    H[1, 1] = 1.0
+    R = np.zeros((2, 2))
+    R[0, 0] = R[1, 1] = sigma_pos * sigma_pos
+    y = np.empty(2)
+    So = np.empty((2, 2))
+    Ko = np.empty((NX, 2))
+    xo = np.empty(NX)
+    Po = np.empty((NX, NX))
+    Pi = np.empty((NX, NX))
+    std = np.empty(NX)
+    h2 = np.empty(2)
+    H2 = np.zeros((2, NX))
+    R2 = np.zeros((2, 2))
+    R2[0, 0] = sigma_sog * sigma_sog
+    R2[1, 1] = sigma_cog * sigma_cog
+    y2 = np.empty(2)
+    S2 = np.empty((2, 2))
+    K2 = np.empty((NX, 2))
+    H1 = np.zeros((1, NX))
+    R1 = np.zeros((1, 1))
+    R1[0, 0] = sigma_sog * sigma_sog
+    y1 = np.empty(1)
+    S1 = np.empty((1, 1))
+    K1 = np.empty((NX, 1))
+    xv = np.empty(NX)
+    Pv = np.empty((NX, NX))
+    noise_dist = nsig * math.sqrt(2.0) * sigma_pos  # noise allowance on a distance
+    seg_id = 0
+    for v in range(n_vessels):
+        a, b = starts[v], starts[v + 1]
+        init = False
+        k_first = 0
+        t_state = 0.0
+        last_t = 0.0  # last accepted report
+        last_x = 0.0
+        last_y = 0.0
+        prev_t = np.nan  # previous used report (accepted or not)
+        prev_x = 0.0
+        prev_y = 0.0
+        run_t = 0.0
+        n_out = 0
+        for i in range(a, b):
+            k = i - a
+            out_seg[i] = -1
+            out_nis[i] = np.nan
+            has[k] = False
+            # ---- stale position: exact repeat of the previous report while moving
+            # (run_t: when the repeated position was first reported)
+            stale = False
+            if use[i] and prev_t == prev_t and z[i, 0] == prev_x and z[i, 1] == prev_y:
+                if init and t[i] > run_t:
+                    kp = k - 1
+                    while kp > 0 and not has[kp]:
+                        kp -= 1
+                    spd = 0.0
+                    if has[kp]:  # filter speed, if significantly above zero
+                        sv = math.sqrt(0.5 * (Pf[kp, 2, 2] + Pf[kp, 3, 3]))
+                        spd = math.sqrt(xf[kp, 2] ** 2 + xf[kp, 3] ** 2) - nsig * sv
+                    if sog[i] == sog[i] and sog[i] > spd:
+                        spd = sog[i]
+                    stale = spd * (t[i] - run_t) > noise_dist
+            elif use[i]:
+                run_t = t[i]
+            if use[i]:
+                prev_t = t[i]
+                prev_x = z[i, 0]
+                prev_y = z[i, 1]
+            # ---- a long gap: implausible jump across it, or a new segment
+            if init and t[i] - t_state > max_gap and use[i]:
+                dxl = z[i, 0] - last_x
+                dyl = z[i, 1] - last_y
+                v_impl = (math.sqrt(dxl * dxl + dyl * dyl) - noise_dist) / (t[i] - last_t + tres)
+                if v_impl > vmax and n_out + 1 < reinit_after and force[i] != 1:
+                    n_out += 1
+                    out_flag[i] = 3
+                    # the row gets no estimate (the track is not propagated over the gap)
+                    continue
+                _close(
+                    k_first, k - 1, a, xp, Pp, Fk, xf, Pf, xs, Ps, has, smooth, out_x, out_std, std
+                )
+                init = False
+            elif init and t[i] - t_state > max_gap:
+                # withheld row after a long gap: end the segment, no estimate for the row
+                _close(
+                    k_first, k - 1, a, xp, Pp, Fk, xf, Pf, xs, Ps, has, smooth, out_x, out_std, std
+                )
+                init = False
+                continue
+            if not init:
+                if not use[i]:
+                    continue  # withheld before a track exists: no estimate
+                seg_id += 1
+                init = True
+                k_first = k
+                n_out = 0
+                _init_at(
+                    k,
+                    z[i],
+                    v0[i],
+                    v0_known[i],
+                    init_v_std,
+                    init_v_std_known,
+                    sigma_pos,
+                    init_w_std,
+                    xp,
+                    Pp,
+                    Fk,
+                    xf,
+                    Pf,
+                )
+                t_state = t[i]
+                last_t = t[i]
+                last_x = z[i, 0]
+                last_y = z[i, 1]
+                has[k] = True
+                out_seg[i] = seg_id
+                continue
+            # ---- predict to t[i] from the previous scratch row (always the one before)
+            dt = t[i] - t_state
+            kp = k - 1
+            while not has[kp]:
+                kp -= 1
+            _ct_f_F(xf[kp], dt, fx, F)
+            _ct_Q(dt, q, q_w, Q)
+            _predict_core(xf[kp], Pf[kp], F, Q, xo, Po)
+            xp[k] = fx
+            Pp[k] = Po
+            Fk[k] = F
+            xf[k] = fx
+            Pf[k] = Po
+            has[k] = True
+            out_seg[i] = seg_id
+            t_state = t[i]
+            if not use[i]:
+                continue
+            if force[i] == 2:
+                out_flag[i] = 1  # rejected by the two-sided test of the first pass
+                continue
+            if stale and force[i] != 1:
+                out_flag[i] = 2  # not counted towards re-initialisation
+                continue
+            # ---- gate
+            y[0] = z[i, 0] - fx[0]
+            y[1] = z[i, 1] - fx[1]
+            s00 = Po[0, 0] + R[0, 0]
+            s01 = Po[0, 1]
+            s11 = Po[1, 1] + R[1, 1]
+            det = s00 * s11 - s01 * s01
+            d2 = (s11 * y[0] * y[0] - 2 * s01 * y[0] * y[1] + s00 * y[1] * y[1]) / det
+            out_nis[i] = d2
+            if d2 > gate:
+                # plausibility: implied speed from the last accepted report and implied
+                # acceleration from the distance to the prediction
+                dxl = z[i, 0] - last_x
+                dyl = z[i, 1] - last_y
+                v_impl = (math.sqrt(dxl * dxl + dyl * dyl) - noise_dist) / (t[i] - last_t + tres)
+                tr = 0.5 * (s00 + s11)
+                lam = tr + math.sqrt(max(tr * tr - det, 0.0))
+                dev = math.sqrt(y[0] * y[0] + y[1] * y[1]) - nsig * math.sqrt(lam)
+                dte = t[i] - last_t + tres
+                a_impl = 2.0 * dev / (dte * dte)
+                if (v_impl > vmax or a_impl > amax) and force[i] != 1:
+                    n_out += 1
+                    if n_out >= reinit_after:
+                        # track lost: close the segment before i, restart at i
+                        _close(
+                            k_first,
+                            k - 1,
+                            a,
+                            xp,
+                            Pp,
+                            Fk,
+                            xf,
+                            Pf,
+                            xs,
+                            Ps,
+                            has,
+                            smooth,
+                            out_x,
+                            out_std,
+                            std,
+                        )
+                        seg_id += 1
+                        k_first = k
+                        n_out = 0
+                        _init_at(
+                            k,
+                            z[i],
+                            v0[i],
+                            v0_known[i],
+                            init_v_std,
+                            init_v_std_known,
+                            sigma_pos,
+                            init_w_std,
+                            xp,
+                            Pp,
+                            Fk,
+                            xf,
+                            Pf,
+                        )
+                        last_t = t[i]
+                        last_x = z[i, 0]
+                        last_y = z[i, 1]
+                        out_seg[i] = seg_id
+                        continue
+                    out_flag[i] = 1
+                    continue
+                # plausible manoeuvre: inflate the prediction so the report sits on the gate
+                f = d2 / gate
+                for j in range(NX):
+                    for jj in range(NX):
+                        Pi[j, jj] = Po[j, jj] * f
+                Pp[k] = Pi
+            else:
+                for j in range(NX):
+                    for jj in range(NX):
+                        Pi[j, jj] = Po[j, jj]
+            _update_core(fx, Pi, y, H, R, xo, Po, So, Ko)
+            if use_vel and sog[i] == sog[i] and sog[i] > vmin:
+                # velocity measurements: SOG (and COG), sequential update after the position
+                _sogcog(xo, h2, H2)
+                if h2[0] > vmin:
+                    nis2 = np.inf
+                    if cog[i] == cog[i]:
+                        y2[0] = sog[i] - h2[0]
+                        y2[1] = _wrap(cog[i] - h2[1])
+                        nis2, _ = _update_core(xo, Po, y2, H2, R2, xv, Pv, S2, K2)
+                    elif use_sog_alone:
+                        y1[0] = sog[i] - h2[0]
+                        for j in range(NX):
+                            H1[0, j] = H2[0, j]
+                        nis2, _ = _update_core(xo, Po, y1, H1, R1, xv, Pv, S1, K1)
+                    if nis2 <= gate:
+                        for j in range(NX):
+                            xo[j] = xv[j]
+                            for jj in range(NX):
+                                Po[j, jj] = Pv[j, jj]
+            n_out = 0
+            xf[k] = xo
+            Pf[k] = Po
+            last_t = t[i]
+            last_x = z[i, 0]
+            last_y = z[i, 1]
+        if init:
+            _close(
+                k_first, b - a - 1, a, xp, Pp, Fk, xf, Pf, xs, Ps, has, smooth, out_x, out_std, std
+            )
+
+
+# ---------------------------------------------------------------------------
+# Public API
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class TrackStates:
+    """Per-row estimates in each vessel's local plane (same row order as the inputs).
+
+    Attributes
+    ----------
+    state : ndarray (N, 5)
+        Smoothed (or filtered) ``[x, y, vx, vy, w]`` (m, m/s, rad/s); NaN without estimate.
+    std : ndarray (N, 5)
+        1-sigma of x, y (m), speed (m/s), course (rad), turn rate (rad/s).
+    outlier : ndarray of bool (N,)
+        Report judged an outlier and not used.
+    outlier_kind : ndarray of int8 (N,)
+        0 = none, else a key of :data:`OUTLIER_KINDS` (1 outside the gate and implausible,
+        2 stale position, 3 implausible jump across a long gap).
+    segment : ndarray of int (N,)
+        Track segment id (splits at gaps / re-initialisations); -1 without estimate.
+    nis : ndarray (N,)
+        NIS of the report against the prediction (NaN for first reports / unused rows).
+    """
+
+    state: FloatArray
+    std: FloatArray
+    outlier: NDArray[np.bool_]
+    outlier_kind: NDArray[np.int8]
+    segment: NDArray[np.int64]
+    nis: FloatArray
+
+
+def track_vessels(
+    vessel: ArrayLike,
+    t: ArrayLike,
+    xy: ArrayLike,
+    config: AisTrackerConfig | None = None,
+    use: ArrayLike | None = None,
+    v0: ArrayLike | None = None,
+    sog: ArrayLike | None = None,
+    cog: ArrayLike | None = None,
+) -> TrackStates:
+    """Track many vessels at once in local planes (the compiled core of the AIS tracker).
+
+    Parameters
+    ----------
+    vessel : array of int (N,)
+        Vessel id of each report (any order; rows are grouped and time-sorted inside,
+        stably, so equal times keep their input order).
+    t : array (N,)
+        Times, s.
+    xy : array (N, 2)
+        Positions East, North (m) in the vessel's local plane.
+    config : AisTrackerConfig
+    use : array of bool (N,), optional
+        False = do not use the report (hold-out): the row still gets the track estimate.
+    v0 : array (N, 2), optional
+        Velocity (East, North; m/s) from SOG/COG for initialisation; NaN where unknown.
+    sog : array (N,), optional
+        Reported speed over ground (m/s; NaN unknown): stale-position test and, with
+        ``use_sog_cog``, a velocity measurement.
+    cog : array (N,), optional
+        Reported course over ground (rad, clockwise from the plane's North; NaN unknown).
+
+    Returns
+    -------
+    TrackStates
+        In the input row order.
+    """
+    cfg = config or AisTrackerConfig()
+    vid = np.asarray(vessel, dtype=np.int64)
+    tt = np.asarray(t, dtype=np.float64)
+    z = np.asarray(xy, dtype=np.float64)
+    n = tt.size
+    if z.shape != (n, 2) or vid.shape != (n,):
+        raise ValueError(f"vessel (N,), t (N,) and xy (N, 2) needed; got {vid.shape}, {z.shape}")
+    if not (np.isfinite(tt).all() and np.isfinite(z).all()):
+        raise ValueError("times and positions must be finite (reject bad rows first)")
+    u = np.ones(n, dtype=bool) if use is None else np.asarray(use, dtype=bool)
+    sg = np.full(n, np.nan) if sog is None else np.asarray(sog, dtype=np.float64)
+    cg = np.full(n, np.nan) if cog is None else np.asarray(cog, dtype=np.float64)
+    vv = np.full((n, 2), np.nan) if v0 is None else np.asarray(v0, dtype=np.float64)
+    order = np.lexsort((tt, vid))
+    ts, zs, us, vs_ = tt[order], z[order], u[order], vid[order]
+    vo = np.ascontiguousarray(vv[order])
+    known: NDArray[np.bool_] = np.asarray(np.isfinite(vo).all(axis=1))
+    vo[~known] = 0.0
+    sgs = sg[order]
+    cgs = cg[order]
+    force = np.zeros(n, dtype=np.int8)
+    out = _run_kernel(vs_, ts, zs, us, force, vo, known, sgs, cgs, cfg)
+    vmax = cfg.max_speed_kn * KNOT_MPS
+    redo = np.ones(n, dtype=bool)
+    for _ in range(cfg.revisit_passes):
+        # revisit the causal decisions with the future (two-sided neighbour test):
+        # outliers plausible on both sides are accepted and accepted reports that are
+        # implausible are rejected
+        flag = out[2]
+        accepted = us & (flag == 0)
+        v_prev, v_next, a_chord = neighbour_plausibility(vs_, ts, zs, accepted, cfg)
+        bad = (v_prev > vmax) | (v_next > vmax) | (a_chord > cfg.max_accel_mps2)
+        free = force == 0  # a decision is revised at most once, so the loop ends
+        acc = ((flag == 1) | (flag == 3)) & ~bad & free
+        rej = accepted & bad & (out[3] >= 0) & free
+        force[acc] = 1
+        force[rej] = 2
+        new = acc | rej
+        if not new.any():
+            break
+        redo = np.isin(vs_, np.unique(vs_[new]))
+        sub = _run_kernel(
+            vs_[redo],
+            ts[redo],
+            zs[redo],
+            us[redo],
+            force[redo],
+            vo[redo],
+            known[redo],
+            sgs[redo],
+            cgs[redo],
+            cfg,
+        )
+        seg_off = int(out[3].max(initial=0))
+        for a_out, a_sub in zip(out, sub, strict=True):
+            a_out[redo] = a_sub
+        out[3][redo] = np.where(sub[3] >= 0, sub[3] + seg_off, -1)
+    inv = np.empty_like(order)
+    inv[order] = np.arange(n)
+    out_x, out_std, out_flag, out_seg, out_nis = (a[inv] for a in out)
+    return TrackStates(out_x, out_std, out_flag > 0, out_flag, out_seg, out_nis)
+
+
+def _run_kernel(
+    vs: NDArray[np.int64],
+    ts: FloatArray,
+    zs: FloatArray,
+    us: NDArray[np.bool_],
+    force: NDArray[np.int8],
+    vo: FloatArray,
+    known: NDArray[np.bool_],
+    sgs: FloatArray,
+    cgs: FloatArray,
+    cfg: AisTrackerConfig,
+) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+    """Run the compiled tracker over rows sorted by (vessel, time)."""
+    n = ts.size
+    starts = np.flatnonzero(np.r_[True, vs[1:] != vs[:-1], True]).astype(np.int64)
+    if n == 0:
+        starts = np.zeros(1, dtype=np.int64)
+    out_x = np.full((n, NX), np.nan)
+    out_std = np.full((n, NX), np.nan)
+    out_flag = np.zeros(n, dtype=np.int8)
+    out_seg = np.full(n, -1, dtype=np.int64)
+    out_nis = np.full(n, np.nan)
+    c = np.ascontiguousarray
+    _track_kernel(
+        starts,
+        c(ts),
+        c(zs),
+        c(us),
+        c(force),
+        c(vo),
+        c(known),
+        c(sgs),
+        c(cgs),
+        cfg.use_sog_cog,
+        cfg.use_sog_alone,
+        cfg.sigma_sog_kn * KNOT_MPS,
+        math.radians(cfg.sigma_cog_deg),
+        cfg.min_speed_kn * KNOT_MPS,
+        cfg.sigma_pos_m,
+        cfg.q_accel,
+        cfg.q_turn,
+        cfg.gate,
+        cfg.max_speed_kn * KNOT_MPS,
+        cfg.max_accel_mps2,
+        cfg.n_sigma,
+        cfg.time_resolution_s,
+        cfg.max_gap_s,
+        cfg.reinit_after,
+        cfg.init_speed_std_mps,
+        cfg.init_sogcog_std_mps,
+        math.radians(cfg.init_turn_std_dps),
+        cfg.smooth,
+        out_x,
+        out_std,
+        out_flag,
+        out_seg,
+        out_nis,
+    )
+    return out_x, out_std, out_flag, out_seg, out_nis
+
+
+def neighbour_plausibility(
+    vessel: NDArray[np.int64],
+    t: FloatArray,
+    xy: FloatArray,
+    accepted: NDArray[np.bool_],
+    config: AisTrackerConfig,
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Two-sided physical plausibility of each report against its accepted neighbours.
+
+    Rows must be sorted by (vessel, time). For every row, with ``p``/``n`` the nearest
+    *other* accepted report of the same vessel before/after it (NaN results where none):
+
+    * ``v_prev = (|z - z_p| - d0) / (t - t_p + tau)``, ``v_next`` likewise (m/s);
+    * ``a_chord = 2 (e - d0) / ((t - t_p + tau)(t_n - t + tau))`` (m/s^2), where ``e`` is
+      the distance from ``z`` to the straight line between ``z_p`` and ``z_n`` at time
+      ``t``: the smallest constant acceleration that takes a vessel from the chord out to
+      the report and back;
+
+    with the noise allowance ``d0 = n_sigma sqrt(2) sigma_pos`` and the timestamp
+    resolution ``tau`` (so that only reports implausible under the most generous reading
+    of the timestamps and noise score high).
+    """
+    n = t.size
+    pos = np.arange(n)
+    acc_idx = np.where(accepted, pos, -1)
+    # previous accepted strictly before: shift the running max by one
+    prev = np.maximum.accumulate(np.r_[-1, acc_idx[:-1]]) if n else acc_idx
+    nxt_src = np.where(accepted, pos, n)
+    nxt = np.minimum.accumulate(np.r_[nxt_src[1:], n][::-1])[::-1] if n else nxt_src
+    has_p = prev >= 0
+    has_p[has_p] &= vessel[prev[has_p]] == vessel[has_p]
+    has_n = nxt < n
+    has_n[has_n] &= vessel[nxt[has_n]] == vessel[has_n]
+    d0 = config.n_sigma * math.sqrt(2.0) * config.sigma_pos_m
+    tau = config.time_resolution_s
+    ip = np.where(has_p, prev, 0)
+    inn = np.where(has_n, nxt, 0)
+    dtp = t - t[ip] + tau
+    dtn = t[inn] - t + tau
+    dtp = np.where(has_p, dtp, 1.0)
+    dtn = np.where(has_n, dtn, 1.0)
+    v_prev = np.where(has_p, (np.hypot(*(xy - xy[ip]).T) - d0) / dtp, np.nan)
+    v_next = np.where(has_n, (np.hypot(*(xy[inn] - xy).T) - d0) / dtn, np.nan)
+    span = t[inn] - t[ip]
+    w = np.where(span > 0, (t - t[ip]) / np.where(span > 0, span, 1.0), 0.5)
+    chord = xy[ip] + w[:, None] * (xy[inn] - xy[ip])
+    e = np.hypot(*(xy - chord).T)
+    a_chord = np.where(has_p & has_n, 2.0 * (e - d0) / (dtp * dtn), np.nan)
+    return v_prev, v_next, a_chord
+
+
+@dataclass(frozen=True)
+class AisTracks:
+    """Tracker output, one entry per row of the :class:`~seatrack.io.ais.AisReports`.
+
+    SI units and radians (degrees/knots only when written out). Rows without an estimate
+    (rejected rows, or withheld rows before a track starts) hold NaN.
+
+    Attributes
+    ----------
+    x_m, y_m : local East, North (m) in the vessel's plane (origin ``lat0``, ``lon0``).
+    lat, lon : smoothed WGS84 position (deg).
+    course : course over ground (rad, clockwise from true North at the vessel, [0, 2pi)).
+    speed : speed over ground (m/s).
+    turn_rate : rad/s, clockwise (starboard) positive.
+    std_x_m, std_y_m : 1-sigma East / North (m); ``std_pos_m`` = sqrt((var_x + var_y)/2).
+    std_course, std_speed, std_turn_rate : 1-sigma (rad, m/s, rad/s).
+    outlier : bool; outlier_kind : int (see :data:`OUTLIER_KINDS`); segment : int;
+    nis : float.
+    """
+
+    x_m: FloatArray
+    y_m: FloatArray
+    lat: FloatArray
+    lon: FloatArray
+    lat0: FloatArray
+    lon0: FloatArray
+    course: FloatArray
+    speed: FloatArray
+    turn_rate: FloatArray
+    std_x_m: FloatArray
+    std_y_m: FloatArray
+    std_pos_m: FloatArray
+    std_course: FloatArray
+    std_speed: FloatArray
+    std_turn_rate: FloatArray
+    outlier: NDArray[np.bool_]
+    outlier_kind: NDArray[np.int8]
+    segment: NDArray[np.int64]
+    nis: FloatArray
+
+
+def _north_angle(lat: FloatArray, lon: FloatArray, lat0: FloatArray, lon0: FloatArray) -> Any:
+    """Bearing (rad) of true North at (lat, lon) in the tangent plane of (lat0, lon0).
+
+    The geodetic North unit vector at the point, ``(-sin p cos l, -sin p sin l, cos p)``
+    in ECEF, projected on the plane's East and North axes (the rows of the ENU rotation of
+    :func:`seatrack.geometry.geodetic_to_enu` at the origin); the angle is the meridian
+    convergence between the vessel and its frame origin (exact on the ellipsoid).
+    """
+    p, lam = np.radians(lat), np.radians(lon)
+    p0, l0 = np.radians(lat0), np.radians(lon0)
+    n = np.stack([-np.sin(p) * np.cos(lam), -np.sin(p) * np.sin(lam), np.cos(p)], -1)
+    e0 = np.stack([-np.sin(l0), np.cos(l0), np.zeros_like(l0)], -1)
+    n0 = np.stack([-np.sin(p0) * np.cos(l0), -np.sin(p0) * np.sin(l0), np.cos(p0)], -1)
+    gam = bearing(np.sum(n * e0, -1), np.sum(n * n0, -1))
+    return np.where(np.isfinite(gam), gam, 0.0)
+
+
+def track_reports(
+    reports: Any,
+    config: AisTrackerConfig | None = None,
+    use: ArrayLike | None = None,
+) -> AisTracks:
+    """Track every vessel of :class:`~seatrack.io.ais.AisReports` (rejected rows skipped).
+
+    Positions go to one local plane per vessel (:func:`seatrack.io.ais.to_local`); the
+    compiled tracker runs over all vessels at once (:func:`track_vessels`); positions come
+    back to WGS84 (:func:`seatrack.io.ais.from_local`) and the course is referred to true
+    North at the vessel (the plane's North differs by the meridian convergence).
+
+    Parameters
+    ----------
+    reports : AisReports
+    config : AisTrackerConfig
+    use : array of bool (N,), optional
+        False withholds a row from the filter (it still gets the track estimate at its
+        time) -- for hold-out tests.
+    """
+    from seatrack.io.ais import from_local, to_local
+
+    cfg = config or AisTrackerConfig()
+    n = len(reports)
+    frame = to_local(reports)
+    ok = reports.valid
+    idx = np.flatnonzero(ok)
+    sog = reports.sog_kn[idx] * KNOT_MPS
+    cog = np.radians(reports.cog_deg[idx])
+    u = None if use is None else np.asarray(use, dtype=bool)[idx]
+    # COG is referred to true North at the vessel; the plane's North differs by the
+    # meridian convergence, so rotate it into the plane (also for the initial velocity)
+    gam0 = _north_angle(reports.lat[idx], reports.lon[idx], frame.lat0[idx], frame.lon0[idx])
+    cog_plane = cog + gam0
+    v0 = np.stack([sog * np.sin(cog_plane), sog * np.cos(cog_plane)], axis=-1)
+    st = track_vessels(
+        reports.mmsi[idx],
+        reports.t[idx],
+        frame.enu[idx, :2],
+        cfg,
+        use=u,
+        v0=v0,
+        sog=sog,
+        cog=cog_plane,
+    )
+
+    def full(a: NDArray, fill: Any = np.nan, dtype: Any = float) -> NDArray:
+        out = np.full((n,) + a.shape[1:], fill, dtype=dtype)
+        out[idx] = a
+        return out
+
+    state = full(st.state)
+    std = full(st.std)
+    lat, lon = from_local(state[:, 0], state[:, 1], frame.lat0, frame.lon0, group=frame.group)
+    gam = _north_angle(lat, lon, frame.lat0, frame.lon0)
+    course_plane = bearing(state[:, 2], state[:, 3])
+    course = np.where(np.isfinite(state[:, 2]), wrap_2pi(course_plane - gam), np.nan)
+    speed = np.hypot(state[:, 2], state[:, 3])
+    return AisTracks(
+        x_m=state[:, 0],
+        y_m=state[:, 1],
+        lat=lat,
+        lon=lon,
+        lat0=frame.lat0,
+        lon0=frame.lon0,
+        course=course,
+        speed=speed,
+        turn_rate=state[:, 4],
+        std_x_m=std[:, 0],
+        std_y_m=std[:, 1],
+        std_pos_m=np.sqrt(0.5 * (std[:, 0] ** 2 + std[:, 1] ** 2)),
+        std_course=std[:, 3],
+        std_speed=std[:, 2],
+        std_turn_rate=std[:, 4],
+        outlier=full(st.outlier, False, bool),
+        outlier_kind=full(st.outlier_kind, 0, np.int8),
+        segment=full(st.segment, -1, np.int64),
+        nis=full(st.nis),
+    )

@@ -1,0 +1,230 @@
+"""Raw NMEA ``!AIVDM`` / ``!AIVDO`` logs with timestamps -> :class:`~seatrack.io.ais.AisReports`.
+
+Each line holds one NMEA 0183 sentence with its time, given either as
+
+* an NMEA 4.10 tag block ``\\c:1509502436*hh\\!AIVDM,...`` (``c`` = UNIX time in seconds;
+  values above 1e11 are taken as milliseconds, as some receivers write them), or
+* a leading timestamp, separated by blanks, ``,`` or ``;``: ISO 8601
+  (``2022-11-01T09:35:36Z``), DMA style (``01/11/2022 09:35:36``) or epoch seconds.
+
+Sentence checksums (and tag-block checksums) are verified here; a line with a wrong one is
+rejected as ``"bad checksum"``. Multi-sentence messages are assembled per
+(talker, channel, sequence id, fragment count) and decoded with ``pyais``; the message time
+is the first fragment's (a later fragment's if only that one carries it) and its line is
+the first fragment's line. Position reports (types 1, 2, 3, 18, 19, 27) become rows;
+other lines are counted in :attr:`AisReports.skipped` by kind, so that
+``len(reports) + sum(skipped.values())`` equals the number of lines in the file.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from functools import reduce
+from operator import xor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from seatrack.io.ais import AisReports, parse_times, validate_reports
+from seatrack.io.table import InputError
+
+__all__ = ["POSITION_TYPES", "looks_like_nmea", "read_nmea", "parse_nmea_lines", "nmea_checksum"]
+
+#: AIS message types that carry a position report
+POSITION_TYPES = frozenset({1, 2, 3, 18, 19, 27})
+
+_TAG = re.compile(rb"^\\([^\\]*)\\")
+_SENTENCE_START = re.compile(rb"[!$\\]")
+
+
+def nmea_checksum(body: bytes) -> int:
+    """XOR of all bytes of ``body`` (the text between ``!``/``$``/``\\`` and ``*``)."""
+    return reduce(xor, body, 0)
+
+
+def _check(text: bytes) -> bool:
+    """True if ``text`` = ``BODY*HH`` (without the leading delimiter) has a valid checksum."""
+    star = text.rfind(b"*")
+    if star < 0 or len(text) < star + 3:
+        return False
+    try:
+        want = int(text[star + 1 : star + 3], 16)
+    except ValueError:
+        return False
+    return nmea_checksum(text[:star]) == want
+
+
+def looks_like_nmea(path: str | Path) -> bool:
+    """True if the first non-blank line of ``path`` is an NMEA sentence (maybe time-prefixed)."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"{p}: file not found")
+    with p.open("rb") as fh:
+        for raw in fh:
+            line = raw.strip()
+            if not line:
+                continue
+            m = _SENTENCE_START.search(line)
+            return m is not None and (b"AIVD" in line or m.start() == 0)
+    return False
+
+
+@dataclass
+class _Pending:
+    line: int
+    time: float
+    parts: dict[int, bytes] = field(default_factory=dict)
+    lines: list[int] = field(default_factory=list)
+
+
+def _time_of(prefix: bytes, tag: bytes | None) -> tuple[float, bool]:
+    """(epoch seconds or NaN, tag-block checksum ok)."""
+    t = float("nan")
+    ok = True
+    if tag is not None:
+        ok = _check(tag)
+        body = tag.split(b"*", 1)[0]
+        for item in body.split(b","):
+            if item.startswith(b"c:"):
+                try:
+                    c = float(item[2:])
+                except ValueError:
+                    continue
+                t = c / 1000.0 if c > 1e11 else c
+    if np.isnan(t) and prefix:
+        txt = prefix.decode("ascii", "replace").strip().rstrip(",;").strip()
+        if txt:
+            t = float(parse_times(np.array([txt]))[0])
+    return t, ok
+
+
+def parse_nmea_lines(lines: list[bytes], source: str = "<nmea>") -> AisReports:
+    """Parse NMEA lines (bytes, without line ends) into validated reports (see module doc)."""
+    from pyais.exceptions import AISBaseException
+    from pyais.messages import AISSentence, NMEASentenceFactory
+
+    rows: list[tuple[int, float, float, float, float, float, float, float, str]] = []
+    skipped: dict[str, int] = {}
+    pending: dict[tuple, _Pending] = {}
+
+    def skip(kind: str, n: int = 1) -> None:
+        skipped[kind] = skipped.get(kind, 0) + n
+
+    def reject(line: int, t: float, reason: str) -> None:
+        nan = float("nan")
+        rows.append((line, -1, t, nan, nan, nan, nan, nan, reason))
+
+    def emit(line: int, t: float, parts: list[bytes]) -> None:
+        try:
+            sentences = [NMEASentenceFactory.produce(b) for b in parts]
+            sent = AISSentence.assemble_from_iterable(sentences)  # type: ignore[arg-type]
+            msg: Any = sent.decode()
+        except (AISBaseException, ValueError, IndexError, TypeError):
+            reject(line, t, "undecodable message")
+            return
+        mtype = int(msg.msg_type)
+        if mtype not in POSITION_TYPES:
+            skip(f"not a position report (type {mtype})")
+            return
+        lat, lon = float(msg.lat), float(msg.lon)
+        sog, cog = float(msg.speed), float(msg.course)
+        hdg = float(getattr(msg, "heading", float("nan")))
+        if mtype == 27:  # 6-bit knots (63 = n/a), 9-bit degrees (511 = n/a)
+            sog = float("nan") if sog >= 63 else sog
+        rows.append((line, int(msg.mmsi), t, lat, lon, sog, cog, hdg, ""))
+
+    for i, raw in enumerate(lines, start=1):
+        line = raw.strip()
+        if not line:
+            skip("blank line")
+            continue
+        start = _SENTENCE_START.search(line)
+        if start is None:
+            skip("not an NMEA sentence")
+            continue
+        prefix, rest = line[: start.start()], line[start.start() :]
+        tag = None
+        m = _TAG.match(rest)
+        if m:
+            tag = m.group(1)
+            rest = rest[m.end() :]
+        t, tag_ok = _time_of(prefix, tag)
+        if not rest.startswith((b"!", b"$")):
+            skip("not an NMEA sentence")
+            continue
+        fields = rest.split(b",")
+        if not rest.startswith(b"!") or len(fields) < 7 or fields[0][3:6] not in (b"VDM", b"VDO"):
+            skip("not an AIS sentence")
+            continue
+        if not tag_ok or not _check(rest[1:]):
+            reject(i, t, "bad checksum")
+            continue
+        try:
+            cnt, num = int(fields[1]), int(fields[2])
+        except ValueError:
+            reject(i, t, "undecodable message")
+            continue
+        if cnt == 1:
+            if np.isnan(t):
+                reject(i, t, "unparsable time")
+                continue
+            emit(i, t, [rest])
+            continue
+        key = (fields[0], fields[4], fields[3], cnt)
+        pend = pending.get(key)
+        if num == 1:
+            if pend is not None:  # a new message started before the old one completed
+                for ln in pend.lines:
+                    reject(ln, pend.time, "incomplete multi-sentence message")
+            pend = pending[key] = _Pending(i, t)
+        elif pend is None or num in pend.parts or num != max(pend.parts) + 1:
+            reject(i, t, "incomplete multi-sentence message")
+            continue
+        pend.parts[num] = rest
+        pend.lines.append(i)
+        if np.isnan(pend.time) and not np.isnan(t):
+            pend.time = t
+        if num == cnt:
+            del pending[key]
+            skip("continuation fragment", len(pend.lines) - 1)
+            if np.isnan(pend.time):
+                reject(pend.line, pend.time, "unparsable time")
+                continue
+            emit(pend.line, pend.time, [pend.parts[k] for k in sorted(pend.parts)])
+    for pend in pending.values():
+        for ln in pend.lines:
+            reject(ln, pend.time, "incomplete multi-sentence message")
+
+    rows.sort(key=lambda r: r[0])
+    n = len(rows)
+    cols = list(zip(*rows, strict=True)) if n else [()] * 9
+    rep = AisReports(
+        sources=(source,),
+        source=np.zeros(n, dtype=np.int64),
+        line=np.array(cols[0], dtype=np.int64),
+        mmsi=np.array(cols[1], dtype=np.int64),
+        t=np.array(cols[2], dtype=float),
+        lat=np.array(cols[3], dtype=float),
+        lon=np.array(cols[4], dtype=float),
+        sog_kn=np.array(cols[5], dtype=float),
+        cog_deg=np.array(cols[6], dtype=float),
+        heading_deg=np.array(cols[7], dtype=float),
+        reject=np.array(cols[8], dtype=str) if n else np.zeros(0, dtype=str),
+        skipped=skipped,
+    )
+    # rows rejected above keep their reason; validate the rest (ranges, n/a codes, duplicates)
+    return validate_reports(rep)
+
+
+def read_nmea(path: str | Path) -> AisReports:
+    """Read a timestamped NMEA AIS log (see the module docstring for the accepted forms)."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"{p}: file not found")
+    data = p.read_bytes()
+    lines = data.splitlines()
+    if not any(ln.strip() for ln in lines):
+        raise InputError(f"{p}: file is empty (expected NMEA sentences)")
+    return parse_nmea_lines(lines, str(p))

@@ -1,0 +1,396 @@
+"""AIS tracker: compiled CT step, synthetic turning vessels with glitches, and the real data
+in ../shared/data/ais (every row accounted for, glitches flagged, flags implausible, hold-out
+prediction against linear interpolation)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from seatrack.filters.ais_tracker import (
+    AisTrackerConfig,
+    ct_step,
+    sogcog_model,
+    track_reports,
+    track_vessels,
+)
+from seatrack.geometry import KNOT_MPS, angle_diff, bearing
+from seatrack.io.ais import AisReports, read_ais_csv, to_local
+from seatrack.models import numerical_jacobian
+from seatrack.models.motion import ct_jacobian, ct_noise, ct_transition
+from seatrack.simulate import Leg, trajectory
+
+DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "ais"
+FILES = [
+    "no_vestland_20220901.csv",
+    "dk_northsea_20221101_1h_selected.csv",
+    "dk_northsea_20221101_1h_all.csv",
+    "dk_gothenburg_20170705_cpa.csv",
+    "us_boston_201401_trajectools.csv",
+]
+CFG = AisTrackerConfig()
+
+
+def data_file(name: str) -> Path:
+    p = DATA / name
+    assert p.is_file(), (
+        f"real AIS test data missing: {p.resolve()} (expected the shared/ folder beside the "
+        "repository, as in CI)"
+    )
+    return p
+
+
+_CACHE: dict[str, tuple[AisReports, object]] = {}
+
+
+def tracked(name: str) -> tuple[AisReports, object]:
+    if name not in _CACHE:
+        r = read_ais_csv(data_file(name))
+        _CACHE[name] = (r, track_reports(r, CFG))
+    return _CACHE[name]
+
+
+# ---------------------------------------------------------------------------
+# compiled CT step
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("w", [0.0, 1e-7, 2e-4, 0.03, -0.08])
+@pytest.mark.parametrize("dt", [0.0, 1.0, 9.5, 120.0])
+def test_ct_step_equals_motion_models(w: float, dt: float) -> None:
+    x = np.array([120.0, -40.0, 3.1, -5.2, w])
+    fx, F, Q = ct_step(x, dt, 0.05, 2e-6)
+    assert np.allclose(fx, ct_transition(x, dt), rtol=1e-12, atol=1e-9)
+    assert np.allclose(F, ct_jacobian(x, dt), rtol=1e-10, atol=1e-9)
+    assert np.allclose(Q, ct_noise(dt, 0.05, 2e-6), rtol=1e-12, atol=1e-15)
+    Jn = numerical_jacobian(lambda s: ct_step(s, dt, 0.05, 2e-6)[0], x, eps=1e-6)
+    assert np.allclose(F, Jn, rtol=1e-5, atol=1e-5)
+
+
+@pytest.mark.parametrize("v", [(3.0, 4.0), (-0.5, 7.0), (-6.0, -0.2), (0.02, -0.03)])
+def test_sogcog_model_jacobian(v: tuple[float, float]) -> None:
+    x = np.array([10.0, 20.0, v[0], v[1], 0.01])
+    h, H = sogcog_model(x)
+    assert h[0] == pytest.approx(np.hypot(*v))
+    assert angle_diff(h[1], bearing(*v)) == pytest.approx(0.0, abs=1e-12)
+    Hn = numerical_jacobian(lambda s: sogcog_model(s)[0], x, eps=1e-7, angular=[False, True])
+    assert np.allclose(H, Hn, rtol=1e-5, atol=1e-6)
+
+
+# ---------------------------------------------------------------------------
+# synthetic vessels: truth known
+# ---------------------------------------------------------------------------
+def _synthetic(n_vessels: int, seed: int) -> dict[str, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    legs = [
+        Leg.straight(300.0),
+        Leg.turn(math.radians(90.0), math.radians(1.0)),
+        Leg.straight(300.0),
+        Leg.turn(math.radians(-120.0), math.radians(0.5)),
+        Leg.straight(200.0),
+    ]
+    out: dict[str, list[np.ndarray]] = {
+        k: [] for k in ("vessel", "t", "z", "truth", "vel", "w", "kind", "sog")
+    }
+    for v in range(n_vessels):
+        t = np.cumsum(rng.uniform(2.0, 12.0, 220))
+        t = t[t < 1330.0]
+        tr = trajectory([0.0, 0.0], rng.uniform(0, 2 * np.pi), 6.0, legs, times=t)
+        z = tr.pos[:, :2] + rng.normal(0.0, 4.0, (t.size, 2))
+        kind = np.zeros(t.size, dtype=int)
+        # gross jumps: 300 m off
+        jumps = rng.choice(np.arange(10, t.size - 10), 4, replace=False)
+        ang = rng.uniform(0, 2 * np.pi, jumps.size)
+        z[jumps] += 300.0 * np.stack([np.sin(ang), np.cos(ang)], -1)
+        kind[jumps] = 1
+        # stale reports: the previous report's position repeated >= 5 s later (>= 30 m of
+        # motion at 6 m/s)
+        cand = np.setdiff1d(np.arange(10, t.size - 10), np.r_[jumps, jumps + 1, jumps - 1])
+        cand = cand[t[cand] - t[cand - 1] >= 5.0]
+        stale = rng.choice(cand, 4, replace=False)
+        stale = stale[kind[stale - 1] == 0]
+        z[stale] = z[stale - 1]
+        kind[stale] = 2
+        ok = np.ones(t.size, dtype=bool)
+        out["vessel"].append(np.full(t.size, v)[ok])
+        out["t"].append(t[ok])
+        out["z"].append(z[ok])
+        out["truth"].append(tr.pos[ok, :2])
+        out["vel"].append(tr.vel[ok, :2])
+        out["w"].append(tr.turn_rate[ok])
+        out["kind"].append(kind[ok])
+        # reported SOG, 0.1 kn resolution as in AIS
+        out["sog"].append(np.round(tr.speed[ok] / KNOT_MPS, 1) * KNOT_MPS)
+    return {k: np.concatenate(v) for k, v in out.items()}
+
+
+def test_synthetic_turning_vessels_with_glitches() -> None:
+    s = _synthetic(12, seed=7)
+    st = track_vessels(s["vessel"], s["t"], s["z"], CFG, sog=s["sog"])
+    clean = s["kind"] == 0
+    assert st.outlier[s["kind"] == 1].all()  # every 300 m jump
+    assert (st.outlier_kind[s["kind"] == 2] == 2).all()  # every stale repeat
+    assert st.outlier[clean].mean() < 0.005  # false alarms
+    err = np.hypot(*(st.state[:, :2] - s["truth"]).T)
+    assert np.sqrt(np.mean(err[clean] ** 2)) < 0.6 * 4.0 * np.sqrt(2)  # below raw noise
+    assert np.sqrt(np.mean(err[~clean] ** 2)) < 8.0  # glitches do not pull the track
+    speed_err = np.hypot(*(st.state[:, 2:4] - s["vel"]).T)
+    assert np.sqrt(np.mean(speed_err**2)) < 0.4
+    course_err = angle_diff(
+        bearing(st.state[:, 2], st.state[:, 3]), bearing(s["vel"][:, 0], s["vel"][:, 1])
+    )
+    assert np.median(np.abs(np.degrees(course_err))) < 2.0
+    # turn rate in the middle half of the 90-s, 1 deg/s turn (t = 300..390 s): the smoothed
+    # turn-rate random walk blurs the onset and the end of the turn over ~20 s
+    in_turn = (s["t"] > 322.5) & (s["t"] < 367.5)
+    assert np.all(np.abs(s["w"][in_turn] - math.radians(1.0)) < 1e-9)
+    assert in_turn.sum() > 50
+    w_err = np.degrees(st.state[in_turn, 4] - s["w"][in_turn])
+    w_std = np.degrees(st.std[in_turn, 4])
+    # ~0.8 deg/s estimated: the slow turn-rate random walk of the defaults (ships) lags a
+    # 90-s turn; the error is within the reported 1-sigma
+    assert abs(np.median(w_err)) < np.median(w_std)
+    assert 0.6 < np.median(np.degrees(st.state[in_turn, 4])) < 1.2
+    # 1-sigma is honest on average: position NEES per axis within a loose chi-square band
+    nees = ((st.state[clean, :2] - s["truth"][clean]) / st.std[clean, :2]) ** 2
+    assert 0.3 < nees.mean() < 2.0
+
+
+def test_batch_equals_one_vessel_at_a_time() -> None:
+    s = _synthetic(5, seed=3)
+    together = track_vessels(s["vessel"], s["t"], s["z"], CFG)
+    shuffle = np.random.default_rng(1).permutation(s["t"].size)
+    shuffled = track_vessels(s["vessel"][shuffle], s["t"][shuffle], s["z"][shuffle], CFG)
+    assert np.array_equal(shuffled.state, together.state[shuffle], equal_nan=True)
+    for v in range(5):
+        m = s["vessel"] == v
+        alone = track_vessels(s["vessel"][m], s["t"][m], s["z"][m], CFG)
+        assert np.array_equal(alone.state, together.state[m])
+        assert np.array_equal(alone.outlier, together.outlier[m])
+
+
+# ---------------------------------------------------------------------------
+# real data
+# ---------------------------------------------------------------------------
+@pytest.mark.parametrize("name", FILES)
+def test_real_every_row_accounted_for(name: str) -> None:
+    r, tr = tracked(name)
+    # an outlier across a long gap (kind 3) has no track around it, hence no estimate
+    gap_out = tr.outlier_kind == 3
+    ok = r.valid & ~gap_out
+    for f in ("lat", "lon", "speed", "course", "turn_rate", "std_pos_m", "std_speed"):
+        a = getattr(tr, f)
+        assert np.isfinite(a[ok]).all(), f
+        assert np.isnan(a[~ok]).all(), f
+    assert (tr.segment[ok] > 0).all() and (tr.segment[~ok] == -1).all()
+    print(
+        f"{name}: {len(r)} rows = {int(ok.sum())} with estimates "
+        f"({int(tr.outlier.sum())} outliers) + {int(gap_out.sum())} outliers after gaps "
+        f"+ {int((~r.valid).sum())} rejected"
+    )
+    assert not tr.outlier[~r.valid].any()
+    # smoothed positions stay near the used reports (here: within 100 m for 99.9 %)
+    fr = to_local(r)
+    used = ok & ~tr.outlier
+    d = np.hypot(tr.x_m[used] - fr.enu[used, 0], tr.y_m[used] - fr.enu[used, 1])
+    assert np.quantile(d, 0.999) < 100.0
+
+
+def _sorted_valid(r: AisReports) -> np.ndarray:
+    ok = np.flatnonzero(r.valid)
+    return ok[np.lexsort((r.t[ok], r.mmsi[ok]))]
+
+
+@pytest.mark.parametrize(
+    "name", ["dk_northsea_20221101_1h_selected.csv", "dk_northsea_20221101_1h_all.csv"]
+)
+def test_real_known_glitches_are_flagged(name: str) -> None:
+    r, tr = tracked(name)
+    o = _sorted_valid(r)
+    E = to_local(r).enu[o, :2]
+    m, t, fl = r.mmsi[o], r.t[o], tr.outlier[o]
+    d0 = CFG.n_sigma * math.sqrt(2) * CFG.sigma_pos_m
+    same = m[1:] == m[:-1]
+    dt = t[1:] - t[:-1]
+    dist = np.hypot(*(E[1:] - E[:-1]).T)
+    # the README's jumps: consecutive reports implying more than 50 kn
+    jump = same & (dt > 0) & (dist > 50 * KNOT_MPS * np.where(dt > 0, dt, 1))
+    first = np.r_[True, ~same][:-1]  # pair starts at a vessel's first report
+    # implausible even with the noise allowance and one second of timestamp slack
+    hard = jump & ((dist - d0) / (dt + CFG.time_resolution_s) > CFG.max_speed_kn * KNOT_MPS)
+    covered = fl[1:] | fl[:-1]
+    print(
+        f"{name}: README jumps {jump.sum()}, flagged {np.sum(jump & covered)}; "
+        f"implausible with allowance {hard.sum()}, flagged {np.sum(hard & covered)}"
+    )
+    assert np.all(covered[hard & ~first])
+    assert np.sum(jump & covered) >= 0.85 * jump.sum()
+    # frozen positions (README: exact repeat of the previous position at > 3 kn)
+    frozen = np.r_[False, same & (dist == 0) & (dt > 0)] & (r.sog_kn[o] > 3)
+    run_start = t.copy()
+    for i in range(1, t.size):
+        if same[i - 1] and dist[i - 1] == 0:
+            run_start[i] = run_start[i - 1]
+    moved = r.sog_kn[o] * KNOT_MPS * (t - run_start) > d0
+    print(
+        f"frozen reports {frozen.sum()}, of which moved beyond the noise allowance "
+        f"{np.sum(frozen & moved)}, flagged stale {np.sum(frozen & moved & fl)}"
+    )
+    assert np.all(tr.outlier_kind[o][frozen & moved] == 2)
+    # the identity collision (vessel 170): Aarhus and the North Sea alternate
+    v170 = m == 170
+    assert fl[v170].sum() >= 4
+    acc = v170 & ~fl
+    seg = tr.segment[o]
+    for i, j in zip(np.flatnonzero(acc)[:-1], np.flatnonzero(acc)[1:], strict=True):
+        if seg[i] == seg[j]:
+            v = (np.hypot(*(E[j] - E[i])) - d0) / (t[j] - t[i] + 1.0)
+            assert v <= CFG.max_speed_kn * KNOT_MPS
+
+
+@pytest.mark.parametrize("name", FILES)
+def test_real_flagged_reports_are_implausible(name: str) -> None:
+    """Independent check of every flag against the accepted reports around it."""
+    r, tr = tracked(name)
+    o = _sorted_valid(r)
+    E = to_local(r).enu[o, :2]
+    m, t, kind = r.mmsi[o], r.t[o], tr.outlier_kind[o]
+    acc = kind == 0
+    d0 = CFG.n_sigma * math.sqrt(2) * CFG.sigma_pos_m
+    tau = CFG.time_resolution_s
+    vmax = CFG.max_speed_kn * KNOT_MPS
+    n_checked = 0
+    for i in np.flatnonzero(kind > 0):
+        n_checked += 1
+        if kind[i] == 2:  # stale: exact repeat of the previous report while moving
+            assert m[i - 1] == m[i] and np.array_equal(E[i], E[i - 1]) and t[i] > t[i - 1]
+            k = i
+            while m[k - 1] == m[i] and np.array_equal(E[k - 1], E[i]):
+                k -= 1
+            # moving: reported SOG, or the track speed significantly above zero
+            sog = r.sog_kn[o][i] * KNOT_MPS if np.isfinite(r.sog_kn[o][i]) else 0.0
+            spd = max(sog, tr.speed[o][i] - CFG.n_sigma * tr.std_speed[o][i])
+            assert spd * (t[i] - t[k]) > d0, (r.line[o[i]], spd, t[i] - t[k])
+            continue
+        p = i - 1
+        while p >= 0 and m[p] == m[i] and not acc[p]:
+            p -= 1
+        n = i + 1
+        while n < t.size and m[n] == m[i] and not acc[n]:
+            n += 1
+        has_p = p >= 0 and m[p] == m[i]
+        has_n = n < t.size and m[n] == m[i]
+        implausible = False
+        if has_p:
+            implausible |= (np.hypot(*(E[i] - E[p])) - d0) / (t[i] - t[p] + tau) > vmax
+        if has_n:
+            implausible |= (np.hypot(*(E[n] - E[i])) - d0) / (t[n] - t[i] + tau) > vmax
+        if has_p and has_n:
+            w = (t[i] - t[p]) / (t[n] - t[p]) if t[n] > t[p] else 0.5
+            e = np.hypot(*(E[i] - (E[p] + w * (E[n] - E[p]))))
+            a = 2 * (e - d0) / ((t[i] - t[p] + tau) * (t[n] - t[i] + tau))
+            implausible |= a > CFG.max_accel_mps2
+        assert implausible, f"{name} line {r.line[o[i]]} flagged but plausible"
+    print(f"{name}: {n_checked} flags checked")
+
+
+# ---------------------------------------------------------------------------
+# hold-out: withhold every 5th report of each vessel and predict it from the track
+# ---------------------------------------------------------------------------
+def _holdout(r: AisReports) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    o = _sorted_valid(r)
+    m = r.mmsi[o]
+    start = np.maximum.accumulate(np.where(np.r_[True, m[1:] != m[:-1]], np.arange(o.size), 0))
+    held = (np.arange(o.size) - start) % 5 == 4
+    use = np.ones(len(r), dtype=bool)
+    use[o[held]] = False
+    tr = track_reports(r, CFG, use=use)
+    E = to_local(r).enu[:, :2]
+    pos = np.arange(o.size)
+    prev = np.maximum.accumulate(np.where(~held, pos, -1))
+    nxt = np.minimum.accumulate(np.where(~held, pos, o.size)[::-1])[::-1]
+    ii = np.flatnonzero(held & (prev >= 0) & (nxt < o.size))
+    ii = ii[(m[prev[ii]] == m[ii]) & (m[nxt[ii]] == m[ii])]  # neighbours on both sides
+    rows, rp, rn = o[ii], o[prev[ii]], o[nxt[ii]]
+    span = r.t[rn] - r.t[rp]
+    w = np.where(span > 0, (r.t[rows] - r.t[rp]) / np.where(span > 0, span, 1.0), 0.5)
+    lerp = E[rp] + w[:, None] * (E[rn] - E[rp])
+    e_lin = np.hypot(*(lerp - E[rows]).T)
+    e_trk = np.hypot(tr.x_m[rows] - E[rows, 0], tr.y_m[rows] - E[rows, 1])
+    # a withheld report that starts a new track segment (after a long gap) has no track
+    # estimate: it is excluded from both methods (counted)
+    has = np.isfinite(e_trk)
+    return e_trk[has], e_lin[has], rows[has]
+
+
+def test_real_holdout_beats_linear_interpolation() -> None:
+    trk, lin, moving, sparse, per_file = [], [], [], [], []
+    lines = []
+    for name in FILES:
+        r = read_ais_csv(data_file(name))
+        et, el, rows = _holdout(r)
+        mv = r.sog_kn[rows] >= 2.0  # moving at the withheld report (reported SOG)
+        trk.append(et)
+        lin.append(el)
+        moving.append(mv)
+        sparse.append(np.full(et.size, name.startswith("us_boston")))
+        per_file.append((np.percentile(et, 95), np.percentile(el, 95)))
+        lines.append(
+            f"{name:38s} n={et.size:5d}  median {np.median(et):5.2f} vs {np.median(el):5.2f} m"
+            f"  p95 {np.percentile(et, 95):6.2f} vs {np.percentile(el, 95):6.2f} m"
+        )
+    et, el = np.concatenate(trk), np.concatenate(lin)
+    mv, sp = np.concatenate(moving), np.concatenate(sparse)
+    stats = {
+        "all": (np.median(et), np.median(el), np.percentile(et, 95), np.percentile(el, 95)),
+        "moving": (
+            np.median(et[mv]),
+            np.median(el[mv]),
+            np.percentile(et[mv], 95),
+            np.percentile(el[mv], 95),
+        ),
+        "sparse": (
+            np.median(et[sp]),
+            np.median(el[sp]),
+            np.percentile(et[sp], 95),
+            np.percentile(el[sp], 95),
+        ),
+    }
+    print("hold-out error, track vs linear interpolation (every 5th report withheld):")
+    print("\n".join(lines))
+    for k, (a, b, c, d) in stats.items():
+        print(f"pooled {k:7s} median {a:5.2f} vs {b:5.2f} m   p95 {c:6.2f} vs {d:6.2f} m")
+    # the 95th percentile is better in every file and overall; on moving vessels the median
+    # is too; on the sparse (1-minute) file both are clearly better. On the dense Danish
+    # files the median favours interpolation: stationary vessels repeat identical positions,
+    # which an interpolation between two identical neighbours reproduces exactly.
+    assert all(a < b for a, b in per_file)  # 95th percentile better in every file
+    assert stats["all"][2] < stats["all"][3]
+    assert stats["moving"][0] < stats["moving"][1]
+    assert stats["moving"][2] < stats["moving"][3]
+    assert stats["sparse"][0] < stats["sparse"][1]
+    assert stats["sparse"][2] < 0.6 * stats["sparse"][3]
+
+
+def test_course_is_referred_to_true_north_far_from_the_frame_origin(tmp_path: Path) -> None:
+    """A vessel sailing along the 60 N parallel for 150 km: true course 090 everywhere,
+    although its frame's North (at the first report) differs by ~2 deg at the far end."""
+    t = np.arange(0.0, 15000.0, 10.0)
+    lon = 3.0 + np.degrees(10.0 * t / (6_394_209.0 * math.cos(math.radians(60.0))))
+    p = tmp_path / "east.csv"
+    with p.open("w") as fh:
+        fh.write("mmsi,time_utc,lat,lon,sog_kn,cog_deg,heading_deg\n")
+        for ti, lo in zip(t, lon, strict=True):
+            stamp = np.datetime_as_string(np.datetime64(int(1.6e9 + ti), "s"))
+            fh.write(f"1,{stamp}Z,60.000000,{lo:.6f},19.4,90.0,90\n")
+    r = read_ais_csv(p)
+    tr = track_reports(r, CFG)
+    far = slice(-200, -20)  # away from the ends of the track
+    assert lon[-1] - lon[0] > 2.5
+    assert np.abs(np.degrees(tr.course[far]) - 90.0).max() < 0.1
+    assert np.abs(tr.lat[far] - 60.0).max() < 2e-6
+    assert np.abs(tr.speed[far] - 10.0).max() < 0.05
+    # in the frame's plane the same motion points ~2 deg off East
+    plane = np.degrees(bearing(np.gradient(tr.x_m, t), np.gradient(tr.y_m, t)))
+    assert np.abs(plane[far] - 90.0).min() > 1.5

@@ -9,6 +9,13 @@ The small, stable public API every method in seatrack builds on:
   innovation of every component flagged in ``angular`` is wrapped to ``(-pi, pi]``.
 * :func:`extended_predict` -- nonlinear motion ``f(x)`` with Jacobian ``F``.
 
+Compiled building blocks, for other Numba kernels (e.g. a whole filter loop compiled in
+one piece) so that they reuse this update rather than re-deriving it:
+:func:`predict_core` ``(x, P, F, Q, xo, Po)``, :func:`update_core`
+``(x, P, y, H, R, xo, Po, So, Ko) -> (nis, loglik)`` (Joseph form, given the innovation)
+and :func:`wrap_angle` (scalar wrap to ``(-pi, pi]``). They write into the output arrays
+and must be called from compiled code with contiguous float64 arrays.
+
 Shapes and broadcasting
 -----------------------
 States are 1-D (``(n,)``), never column vectors. Every argument may carry leading
@@ -46,6 +53,9 @@ from numpy.typing import ArrayLike, NDArray
 FloatArray = NDArray[np.float64]
 
 __all__ = [
+    "predict_core",
+    "update_core",
+    "wrap_angle",
     "UpdateResult",
     "predict",
     "extended_predict",
@@ -83,7 +93,7 @@ def _cov_core(P, F, Q, Po):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _predict_core(x, P, F, Q, xo, Po):  # pragma: no cover - compiled
+def predict_core(x, P, F, Q, xo, Po):  # pragma: no cover - compiled
     """``xo = F x``; ``Po = F P F^T + Q`` (symmetrised)."""
     n = x.shape[0]
     for i in range(n):
@@ -101,7 +111,7 @@ def _predict_core(x, P, F, Q, xo, Po):  # pragma: no cover - compiled
     cache=True,
 )
 def _predict_kernel(x, P, F, Q, xo, Po):  # pragma: no cover - compiled
-    _predict_core(x, P, F, Q, xo, Po)
+    predict_core(x, P, F, Q, xo, Po)
 
 
 @guvectorize(
@@ -115,7 +125,7 @@ def _cov_predict_kernel(P, F, Q, Po):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
+def update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
     """Joseph-form update given the innovation ``y``; returns (nis, loglik)."""
     n = x.shape[0]
     m = y.shape[0]
@@ -230,7 +240,7 @@ def _update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _wrap(a):  # pragma: no cover - compiled
+def wrap_angle(a):  # pragma: no cover - compiled
     w = (a + math.pi) % (2.0 * math.pi) - math.pi
     if w <= -math.pi:
         w += 2.0 * math.pi
@@ -253,7 +263,7 @@ def _angular_innovation(z, hx, angular, yo):  # pragma: no cover - compiled
     for i in range(z.shape[0]):
         d = z[i] - hx[i]
         if angular[i] != 0.0:
-            d = _wrap(d)
+            d = wrap_angle(d)
         yo[i] = d
 
 
@@ -268,7 +278,7 @@ def _angular_innovation(z, hx, angular, yo):  # pragma: no cover - compiled
 )
 def _update_kernel(x, P, z, hx, H, R, angular, xo, Po, yo, So, nis, ll, Ko):  # pragma: no cover
     _angular_innovation(z, hx, angular, yo)
-    a, b = _update_core(x, P, yo, H, R, xo, Po, So, Ko)
+    a, b = update_core(x, P, yo, H, R, xo, Po, So, Ko)
     nis[0] = a
     ll[0] = b
 
@@ -284,7 +294,7 @@ def _update_kernel(x, P, z, hx, H, R, angular, xo, Po, yo, So, nis, ll, Ko):  # 
 )
 def _linear_update_kernel(x, P, z, H, R, xo, Po, yo, So, nis, ll, Ko):  # pragma: no cover
     _linear_innovation(x, z, H, yo)
-    a, b = _update_core(x, P, yo, H, R, xo, Po, So, Ko)
+    a, b = update_core(x, P, yo, H, R, xo, Po, So, Ko)
     nis[0] = a
     ll[0] = b
 
@@ -292,13 +302,13 @@ def _linear_update_kernel(x, P, z, H, R, xo, Po, yo, So, nis, ll, Ko):  # pragma
 @njit(cache=True)
 def _linear_update_single(x, P, z, H, R, xo, Po, yo, So, Ko):  # pragma: no cover - compiled
     _linear_innovation(x, z, H, yo)
-    return _update_core(x, P, yo, H, R, xo, Po, So, Ko)
+    return update_core(x, P, yo, H, R, xo, Po, So, Ko)
 
 
 @njit(cache=True)
 def _extended_update_single(x, P, z, hx, H, R, angular, xo, Po, yo, So, Ko):  # pragma: no cover
     _angular_innovation(z, hx, angular, yo)
-    return _update_core(x, P, yo, H, R, xo, Po, So, Ko)
+    return update_core(x, P, yo, H, R, xo, Po, So, Ko)
 
 
 # ---------------------------------------------------------------------------
@@ -357,8 +367,8 @@ def _is_single(ndim_sum: int, *arrays: Any) -> bool:
     """True when the arguments carry no leading (batch) dimensions.
 
     Such calls go straight to the compiled single-state function; everything else goes
-    through the broadcasting gufunc. Both wrap the *same* compiled core (``_predict_core``,
-    ``_update_core``); only the dispatch differs (the gufunc machinery costs ~0.3 us per
+    through the broadcasting gufunc. Both wrap the *same* compiled core (``predict_core``,
+    ``update_core``); only the dispatch differs (the gufunc machinery costs ~0.3 us per
     output array, a third of a 4-state update). Each argument has at least its core
     number of dimensions, so the sum equals ``ndim_sum`` only when none has more.
     """
@@ -401,7 +411,7 @@ def predict(
         # outputs allocated here: boxing arrays created inside compiled code costs more
         n = x.shape[0]  # type: ignore[union-attr]
         xo, Po = np.empty(n), np.empty((n, n))
-        _predict_core(x, P, F, Q, xo, Po)
+        predict_core(x, P, F, Q, xo, Po)
         return xo, Po
     # the gufunc casts its inputs itself (lists, ints) and broadcasts leading dimensions
     return _predict_kernel(x, P, F, Q)  # type: ignore[no-any-return]

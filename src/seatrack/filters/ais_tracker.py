@@ -62,7 +62,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
 from seatrack.geometry import KNOT_MPS, bearing, wrap_2pi
-from seatrack.kalman import _predict_core, _update_core, _wrap
+from seatrack.kalman import predict_core, update_core, wrap_angle
 
 FloatArray = NDArray[np.float64]
 
@@ -597,7 +597,7 @@ def _track_kernel(
                 kp -= 1
             _ct_f_F(xf[kp], dt, fx, F)
             _ct_Q(dt, q, q_w, Q)
-            _predict_core(xf[kp], Pf[kp], F, Q, xo, Po)
+            predict_core(xf[kp], Pf[kp], F, Q, xo, Po)
             xp[k] = fx
             Pp[k] = Po
             Fk[k] = F
@@ -690,7 +690,7 @@ def _track_kernel(
                 for j in range(NX):
                     for jj in range(NX):
                         Pi[j, jj] = Po[j, jj]
-            _update_core(fx, Pi, y, H, R, xo, Po, So, Ko)
+            update_core(fx, Pi, y, H, R, xo, Po, So, Ko)
             if use_vel and sog[i] == sog[i] and sog[i] > vmin:
                 # velocity measurements: SOG (and COG), sequential update after the position
                 _sogcog(xo, h2, H2)
@@ -698,13 +698,13 @@ def _track_kernel(
                     nis2 = np.inf
                     if cog[i] == cog[i]:
                         y2[0] = sog[i] - h2[0]
-                        y2[1] = _wrap(cog[i] - h2[1])
-                        nis2, _ = _update_core(xo, Po, y2, H2, R2, xv, Pv, S2, K2)
+                        y2[1] = wrap_angle(cog[i] - h2[1])
+                        nis2, _ = update_core(xo, Po, y2, H2, R2, xv, Pv, S2, K2)
                     elif use_sog_alone:
                         y1[0] = sog[i] - h2[0]
                         for j in range(NX):
                             H1[0, j] = H2[0, j]
-                        nis2, _ = _update_core(xo, Po, y1, H1, R1, xv, Pv, S1, K1)
+                        nis2, _ = update_core(xo, Po, y1, H1, R1, xv, Pv, S1, K1)
                     if nis2 <= gate:
                         for j in range(NX):
                             xo[j] = xv[j]

@@ -62,7 +62,7 @@ from numba import guvectorize, njit
 from numpy.typing import ArrayLike, NDArray
 
 from seatrack.geometry import G0
-from seatrack.kalman import _update_core
+from seatrack.kalman import update_core
 
 FloatArray = NDArray[np.float64]
 
@@ -487,7 +487,7 @@ def _step_core(
         yc[i] = Z[i] - xc[i]
     So = np.empty((d, d))
     K = np.empty((n, d))
-    _update_core(xc, Pb, yc, H, R, xo, Po, So, K)  # xo = Phi x + K (Z - H Phi x)
+    update_core(xc, Pb, yc, H, R, xo, Po, So, K)  # xo = Phi x + K (Z - H Phi x)
     # --- step 6: x(+) = x~ + K (Z - H x~) = [Phi x + K (Z - H Phi x)] + (I - KH) Gamma' u
     u = np.zeros(d)
     for a in range(N):

@@ -1,0 +1,176 @@
+"""``seatrack navigate`` and ``seatrack survey``: own-ship position from radar echoes of
+mapped landmarks (JP H03-66630, spec ``landmark_nav.md``).
+
+``seatrack navigate --map MAP.csv --echoes ECHOES.csv [--gyro GYRO.csv]
+--start "x_m,y_m,heading_deg,speed_mps" --out NAV.csv``
+
+``seatrack survey --map MAP.csv --echoes E1.csv [--echoes E2.csv ...] [--gyro G1.csv ...]
+--start "..." [--start ...] --out MAP.csv [--drop-poor]``: one passage per ``--echoes``
+(with the matching ``--gyro`` and ``--start``; a single ``--start`` serves all); the map
+is corrected from the passages and written.
+
+File formats: see :mod:`seatrack.navigation.files` and :mod:`seatrack.navigation.landmarks`.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import typer
+
+from seatrack.io.table import InputError
+
+
+def parse_start(text: str) -> list[float]:
+    """``"x_m,y_m,heading_deg,speed_mps"`` -> initial state ``[X, Y, alpha, Xdot, Ydot, 0]``
+    (velocity along the heading)."""
+    parts = [p.strip() for p in text.split(",")]
+    try:
+        vals = [float(p) for p in parts]
+    except ValueError:
+        vals = []
+    if len(vals) != 4 or not all(math.isfinite(v) for v in vals):
+        raise InputError(
+            f"--start must be 'x_m,y_m,heading_deg,speed_mps' (4 numbers), got {text!r}"
+        )
+    x, y, hd, v = vals
+    a = math.radians(hd)
+    return [x, y, a, v * math.sin(a), v * math.cos(a), 0.0]
+
+
+def _config(period: float, range_limit: float, offset: float, method: str, clutter: float) -> Any:
+    from dataclasses import replace
+
+    from seatrack.navigation.navigator import NavigatorConfig
+
+    if not (period > 0 and range_limit > 0 and clutter > 0):
+        raise InputError("--antenna-period, --range-limit and --clutter-density must be positive")
+    if method not in ("ekf", "srif"):
+        raise InputError(f"--method must be 'ekf' or 'srif', got {method!r}")
+    cfg = NavigatorConfig(
+        antenna_period=period, range_limit=range_limit, antenna_offset=offset, method=method
+    )
+    return replace(cfg, gate=replace(cfg.gate, clutter_density=clutter))
+
+
+def _origin(text: str | None) -> tuple[float, float] | None:
+    if text is None:
+        return None
+    try:
+        lat, lon = (float(v) for v in text.split(","))
+    except ValueError:
+        raise InputError(f"--origin must be 'lat_deg,lon_deg', got {text!r}") from None
+    return lat, lon
+
+
+def register(app: typer.Typer) -> None:
+    """Add ``navigate`` and ``survey`` to the CLI."""
+    period_opt = typer.Option(2.5, "--antenna-period", help="Antenna revolution period (s).")
+    range_opt = typer.Option(3000.0, "--range-limit", help="Radar range used for the window (m).")
+    offset_opt = typer.Option(
+        0.0, "--antenna-offset", help="Antenna aft of the reference point (m)."
+    )
+    method_opt = typer.Option("ekf", "--method", help="ekf (Kalman, Joseph) or srif.")
+    clutter_opt = typer.Option(
+        1e-5, "--clutter-density", help="False echoes per m^2 per revolution (b)."
+    )
+    origin_opt = typer.Option(
+        None, "--origin", help="lat_deg,lon_deg of the local frame, for maps given in lat/lon."
+    )
+
+    @app.command("navigate")
+    def navigate_cmd(
+        map_file: Path = typer.Option(
+            ..., "--map", help="MAP.csv: id,kind,x_m,y_m,orientation_deg."
+        ),
+        echoes: Path = typer.Option(
+            ..., "--echoes", help="ECHOES.csv: time_s,antenna_deg,range_m."
+        ),
+        gyro: Path | None = typer.Option(None, "--gyro", help="GYRO.csv: time_s,turn_rate_dps."),
+        start: str = typer.Option(
+            ..., "--start", help="x_m,y_m,heading_deg,speed_mps at the first echo."
+        ),
+        out: Path = typer.Option(..., "--out", help="NAV.csv to write."),
+        antenna_period: float = period_opt,
+        range_limit: float = range_opt,
+        antenna_offset: float = offset_opt,
+        method: str = method_opt,
+        clutter_density: float = clutter_opt,
+        origin: str | None = origin_opt,
+    ) -> None:
+        """Own-ship position and heading from radar echoes of mapped landmarks (JP H03-66630)."""
+        from seatrack.navigation.files import read_echoes, read_gyro, write_nav
+        from seatrack.navigation.landmarks import read_map_csv
+        from seatrack.navigation.navigator import navigate
+
+        cfg = _config(antenna_period, range_limit, antenna_offset, method, clutter_density)
+        x0 = parse_start(start)
+        lm = read_map_csv(map_file, _origin(origin))
+        ech = read_echoes(echoes)
+        gy = read_gyro(gyro) if gyro is not None else None
+        res = navigate(lm, ech, x0, cfg, gyro=gy)
+        write_nav(out, res)
+        typer.echo(
+            f"{res.t.size} filter cycles, {res.n_updates} landmark updates "
+            f"({int(res.attempts.sum())} passes served) -> {out}"
+        )
+
+    @app.command("survey")
+    def survey_cmd(
+        map_file: Path = typer.Option(..., "--map", help="MAP.csv to correct."),
+        echoes: list[Path] = typer.Option(
+            ..., "--echoes", help="ECHOES.csv of one passage (repeat)."
+        ),
+        gyro: list[Path] | None = typer.Option(
+            None, "--gyro", help="GYRO.csv per passage (repeat)."
+        ),
+        start: list[str] = typer.Option(
+            ..., "--start", help="x_m,y_m,heading_deg,speed_mps (repeat or one)."
+        ),
+        out: Path = typer.Option(..., "--out", help="Corrected MAP.csv to write."),
+        drop_poor: bool = typer.Option(
+            False, "--drop-poor", help="Remove poorly visible landmarks."
+        ),
+        min_visibility: float = typer.Option(
+            0.5, "--min-visibility", help="Flag below this hit fraction."
+        ),
+        antenna_period: float = period_opt,
+        range_limit: float = range_opt,
+        antenna_offset: float = offset_opt,
+        method: str = method_opt,
+        clutter_density: float = clutter_opt,
+        origin: str | None = origin_opt,
+    ) -> None:
+        """Correct a landmark map from recorded passages; flag poorly visible landmarks."""
+        from seatrack.navigation.files import read_echoes, read_gyro
+        from seatrack.navigation.landmarks import read_map_csv, write_map_csv
+        from seatrack.navigation.navigator import navigate
+        from seatrack.navigation.survey import SurveyConfig, survey
+
+        cfg = _config(antenna_period, range_limit, antenna_offset, method, clutter_density)
+        gy = list(gyro or [])
+        if gy and len(gy) != len(echoes):
+            raise InputError(f"give one --gyro per --echoes ({len(echoes)}), got {len(gy)}")
+        if len(start) not in (1, len(echoes)):
+            raise InputError(
+                f"give one --start, or one per --echoes ({len(echoes)}), got {len(start)}"
+            )
+        lm = read_map_csv(map_file, _origin(origin))
+        runs = []
+        for i, e in enumerate(echoes):
+            x0 = parse_start(start[i if len(start) > 1 else 0])
+            runs.append(
+                navigate(lm, read_echoes(e), x0, cfg, gyro=read_gyro(gy[i]) if gy else None)
+            )
+        res = survey(lm, runs, SurveyConfig(min_visibility=min_visibility, drop_poor=drop_poor))
+        write_map_csv(res.corrected, out)
+        for j in range(len(lm)):
+            flag = "  POORLY VISIBLE" if res.poorly_visible[j] else ""
+            c = res.correction[j]
+            typer.echo(
+                f"{lm.ids[j]}: correction ({c[0]:+.1f}, {c[1]:+.1f}) m from {res.n_records[j]} "
+                f"measurements, visibility {res.visibility[j]:.2f}{flag}"
+            )
+        typer.echo(f"corrected map ({len(res.corrected)} landmarks) -> {out}")

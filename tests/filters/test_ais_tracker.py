@@ -13,6 +13,7 @@ import pytest
 from seatrack.filters.ais_tracker import (
     AisTrackerConfig,
     ct_step,
+    position_noise,
     sogcog_model,
     track_reports,
     track_vessels,
@@ -298,14 +299,16 @@ def test_real_flagged_reports_are_implausible(name: str) -> None:
 # ---------------------------------------------------------------------------
 # hold-out: withhold every 5th report of each vessel and predict it from the track
 # ---------------------------------------------------------------------------
-def _holdout(r: AisReports) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _holdout(
+    r: AisReports, cfg: AisTrackerConfig = CFG
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     o = _sorted_valid(r)
     m = r.mmsi[o]
     start = np.maximum.accumulate(np.where(np.r_[True, m[1:] != m[:-1]], np.arange(o.size), 0))
     held = (np.arange(o.size) - start) % 5 == 4
     use = np.ones(len(r), dtype=bool)
     use[o[held]] = False
-    tr = track_reports(r, CFG, use=use)
+    tr = track_reports(r, cfg, use=use)
     E = to_local(r).enu[:, :2]
     pos = np.arange(o.size)
     prev = np.maximum.accumulate(np.where(~held, pos, -1))
@@ -325,11 +328,12 @@ def _holdout(r: AisReports) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def test_real_holdout_beats_linear_interpolation() -> None:
-    trk, lin, moving, sparse, per_file = [], [], [], [], []
+    trk, lin, moving, sparse, per_file, med_file = [], [], [], [], [], {}
     lines = []
     for name in FILES:
         r = read_ais_csv(data_file(name))
         et, el, rows = _holdout(r)
+        med_file[name] = (np.median(et), np.median(el))
         mv = r.sog_kn[rows] >= 2.0  # moving at the withheld report (reported SOG)
         trk.append(et)
         lin.append(el)
@@ -362,15 +366,84 @@ def test_real_holdout_beats_linear_interpolation() -> None:
     for k, (a, b, c, d) in stats.items():
         print(f"pooled {k:7s} median {a:5.2f} vs {b:5.2f} m   p95 {c:6.2f} vs {d:6.2f} m")
     # the 95th percentile is better in every file and overall; on moving vessels the median
-    # is too; on the sparse (1-minute) file both are clearly better. On the dense Danish
-    # files the median favours interpolation: stationary vessels repeat identical positions,
-    # which an interpolation between two identical neighbours reproduces exactly.
+    # is too; on the sparse (1-minute) file both are clearly better, and the median is
+    # better on the Norwegian file. On the dense Danish files (and the 49 withheld reports
+    # of Gothenburg) the median favours interpolation: the report errors there are
+    # correlated between neighbours (positions rounded to a grid, a vessel at rest
+    # repeating its position, timestamps off by whole seconds for single reports), which
+    # the nearest two reports carry and no smooth track predicts; least-squares local
+    # polynomial fits through 4-6 neighbours lose the median to interpolation there too.
     assert all(a < b for a, b in per_file)  # 95th percentile better in every file
+    for name in ("no_vestland_20220901.csv", "us_boston_201401_trajectools.csv"):
+        assert med_file[name][0] < med_file[name][1], name
     assert stats["all"][2] < stats["all"][3]
     assert stats["moving"][0] < stats["moving"][1]
     assert stats["moving"][2] < stats["moving"][3]
     assert stats["sparse"][0] < stats["sparse"][1]
     assert stats["sparse"][2] < 0.6 * stats["sparse"][3]
+
+
+def test_real_estimated_noise_improves_dense_files() -> None:
+    """The per-vessel noise estimate (vs the fixed 5 m sigma) lowers the hold-out median on
+    the dense files, where the cross-track GNSS noise is well below a metre."""
+    fixed = AisTrackerConfig(estimate_noise=False)
+    for name in ("dk_northsea_20221101_1h_selected.csv", "dk_northsea_20221101_1h_all.csv"):
+        r = read_ais_csv(data_file(name))
+        est = np.median(_holdout(r)[0])
+        fix = np.median(_holdout(r, fixed)[0])
+        print(f"{name}: hold-out median {est:.2f} m (estimated noise) vs {fix:.2f} m (fixed)")
+        assert est < 0.95 * fix
+
+
+# ---------------------------------------------------------------------------
+# position noise estimate
+# ---------------------------------------------------------------------------
+def _jittered_vessels(seed: int) -> dict[str, np.ndarray]:
+    """Three vessels: 7 m/s straight + turn, 3 m/s, and one at rest on a 2-m grid; reports
+    every 2-12 s, white position noise 0.4 m, timestamp error 0.5 s (moving vessels)."""
+    rng = np.random.default_rng(seed)
+    out: dict[str, list[np.ndarray]] = {k: [] for k in ("vessel", "t", "z")}
+    for v, speed in enumerate((7.0, 3.0, 0.0)):
+        t = np.cumsum(rng.uniform(2.0, 12.0, 400))
+        legs = [Leg.straight(1500.0), Leg.turn(math.radians(60.0), math.radians(0.3))]
+        legs += [Leg.straight(3000.0)]
+        tau = rng.normal(0.0, 0.5, t.size) if speed > 0 else np.zeros(t.size)
+        tr = trajectory([0.0, 0.0], 0.7, max(speed, 1e-9), legs, times=t + tau)
+        z = tr.pos[:, :2] + rng.normal(0.0, 0.4, (t.size, 2))
+        if speed == 0:
+            z = 2.0 * np.round(z / 2.0)  # at rest, rounded to a 2 m grid: mostly repeats
+        out["vessel"].append(np.full(t.size, v))
+        out["t"].append(t)
+        out["z"].append(z)
+    return {k: np.concatenate(a) for k, a in out.items()}
+
+
+def test_position_noise_recovers_position_and_timestamp_sigma() -> None:
+    s = _jittered_vessels(5)
+    use = np.ones(s["t"].size, dtype=bool)
+    sig = position_noise(s["vessel"], s["t"], s["z"], use, CFG)
+    for v in (0, 1):
+        sp, st = sig[s["vessel"] == v][0]
+        assert 0.3 < sp < 0.55, (v, sp)  # 0.4 m (the turn adds a little)
+        assert 0.4 < st < 0.6, (v, st)  # 0.5 s
+    # the vessel at rest repeats its grid point (>90 % of reports): the trimmed residual
+    # scale is 0 -> the floor (a limitation: the 2-m grid's 0.58 m is not seen)
+    sp, st = sig[s["vessel"] == 2][0]
+    assert sp == CFG.sigma_pos_min_m
+    assert st == pytest.approx(CFG.sigma_time_min_s)
+    # withheld reports do not enter the estimate
+    held = np.zeros_like(use)
+    held[::5] = True
+    z2 = s["z"].copy()
+    z2[held] += 1000.0
+    a = position_noise(s["vessel"], s["t"], s["z"], ~held, CFG)
+    b = position_noise(s["vessel"], s["t"], z2, ~held, CFG)
+    assert np.array_equal(a, b)
+    # too few residuals: the configured sigma and the timestamp floor
+    few = position_noise(
+        np.zeros(5, np.int64), np.arange(5.0), np.zeros((5, 2)), np.ones(5, bool), CFG
+    )
+    assert np.all(few[:, 0] == CFG.sigma_pos_m) and np.all(few[:, 1] == CFG.sigma_time_min_s)
 
 
 def test_course_is_referred_to_true_north_far_from_the_frame_origin(tmp_path: Path) -> None:

@@ -240,6 +240,18 @@ def test_local_frame_round_trip_per_vessel() -> None:
     assert np.hypot(fr.enu[:, 0], fr.enu[:, 1]).max() > 1e5
 
 
+def test_from_local_with_a_vessel_without_estimates() -> None:
+    """A vessel none of whose rows has an estimate (all NaN) must not break the others."""
+    r = read_ais_csv(data_file("no_vestland_20220901.csv"))
+    fr = to_local(r)
+    east, north = fr.enu[:, 0].copy(), fr.enu[:, 1].copy()
+    first = r.mmsi == np.unique(r.mmsi)[0]
+    east[first] = np.nan
+    lat, lon = from_local(east, north, fr.lat0, fr.lon0, group=fr.group)
+    assert np.isnan(lat[first]).all()
+    assert np.abs(lat[~first] - r.lat[~first]).max() < 1e-9
+
+
 def test_tracks_csv_order_and_accounting(tmp_path: Path) -> None:
     rows = [
         ["5", "2022-11-01T09:00:10Z", "56.0", "7.0", "", "", ""],

@@ -132,7 +132,12 @@ def register(app: typer.Typer) -> None:
         out: Path = typer.Option(..., "--out", "-o", help="TRACKS.csv to write"),
         geojson: Path | None = typer.Option(None, "--geojson", help="GeoJSON file to write"),
         html: Path | None = typer.Option(None, "--html", help="offline HTML map to write"),
-        sigma_pos: float = typer.Option(5.0, "--sigma-pos", help="AIS position sigma, m"),
+        sigma_pos: float = typer.Option(
+            5.0,
+            "--sigma-pos",
+            help="largest AIS position sigma, m (outlier noise allowance; the tracker "
+            "estimates each vessel's own, at most this)",
+        ),
         max_gap: float = typer.Option(
             600.0, "--max-gap", help="split tracks at gaps longer than this, s"
         ),

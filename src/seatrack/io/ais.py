@@ -481,14 +481,22 @@ class LocalFrame:
 
 
 def _groups(group: NDArray[np.int64]) -> list[NDArray[np.int64]]:
-    """Row indices of each group id >= 0 (ids 0..G-1), by one stable sort."""
+    """Row indices of each group id >= 0 that has rows, by one stable sort.
+
+    Ids need not be contiguous: an id with no rows (e.g. a vessel none of whose rows has an
+    estimate) gives no group rather than an empty one.
+    """
     idx = np.flatnonzero(group >= 0)
     if idx.size == 0:
         return []
     g = group[idx]
     order = np.argsort(g, kind="stable")
     bounds = np.searchsorted(g[order], np.arange(int(g.max()) + 2))
-    return [idx[order[bounds[k] : bounds[k + 1]]] for k in range(bounds.size - 1)]
+    return [
+        idx[order[bounds[k] : bounds[k + 1]]]
+        for k in range(bounds.size - 1)
+        if bounds[k + 1] > bounds[k]
+    ]
 
 
 def to_local(r: AisReports) -> LocalFrame:

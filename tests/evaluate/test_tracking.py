@@ -76,46 +76,27 @@ def test_method_config_and_sensor_choice():
     assert method_config(sc2, tracking_sensor(sc2), "ekf")["q"] == 1e-6
 
 
-def test_unknown_auto_key_is_dropped_but_user_keys_and_failures_are_reported(monkeypatch):
+def test_every_method_accepts_the_sensor_keys_and_failures_are_reported(monkeypatch):
+    """The sensor sigmas go to every registered method (each accepts COMMON_CONFIG_KEYS);
+    a method that raises is reported as a failed run, not fatal."""
     import seatrack.filters.registry as registry
 
-    calls = []
-
-    def strict(plots, config):
-        calls.append(dict(config))
-        if "sigma_range_rate_mps" in config:
-            raise ValueError(
-                "strict: unknown config key 'sigma_range_rate_mps'; "
-                "known keys: q, sigma_azimuth_deg, sigma_range_m"
-            )
-        n = len(plots)
-        cols = {k: np.zeros(n) for k in registry.COMMON_COLUMNS}
-        cols.update(std_x_m=np.ones(n), std_y_m=np.ones(n), std_z_m=np.ones(n))
-        return cols
+    sc = load_scenario(bundled_scenario("demo"))
+    s = tracking_sensor(sc)
+    data = sc.simulate(np.random.default_rng(0)).sensor("radar")
+    methods = list(registry.METHODS)
+    cfg = {m: method_config(sc, s, m) for m in methods}
+    assert set(registry.COMMON_CONFIG_KEYS) - {"sigma_elevation_deg"} <= set(cfg["ekf"])
+    out = run_methods(data, methods, cfg)
+    for m in methods:
+        assert all(not r.error for r in out[m]), (m, [r.error for r in out[m]])
 
     def broken(plots, config):
         raise RuntimeError("boom")
 
-    monkeypatch.setattr(
-        registry, "get_method", lambda name: {"strict": strict, "broken": broken}[name]
-    )
-    sc = load_scenario(bundled_scenario("demo"))
-    s = tracking_sensor(sc)
-    data = sc.simulate(np.random.default_rng(0)).sensor("radar")
-    cfg = {m: method_config(sc, s, m) for m in ("strict", "broken")}
-    out = run_methods(data, ["strict", "broken"], cfg)
-    assert all(not r.error for r in out["strict"])
-    assert "sigma_range_rate_mps" not in calls[-1]
-    assert "sigma_range_m" in calls[-1] and "sigma_azimuth_deg" in calls[-1]
-    assert all(r.dropped == ("sigma_range_rate_mps",) for r in out["strict"])
-    assert len(calls) == len(data.measurements) + 1  # one retry, then the key stays dropped
+    monkeypatch.setattr(registry, "get_method", lambda name: broken)
+    out = run_methods(data, ["broken"], {"broken": {}})
     assert all(r.error == "RuntimeError: boom" for r in out["broken"])
-    # a key the user set explicitly is not dropped: the method's error is reported
-    calls.clear()
-    out = run_methods(
-        data, ["strict"], cfg, user_keys={"strict": frozenset({"sigma_range_rate_mps"})}
-    )
-    assert all("unknown config key" in r.error for r in out["strict"])
 
 
 def test_summarize_statistics_by_hand():

@@ -130,7 +130,6 @@ def register(app: typer.Typer) -> None:
             run_methods,
             summarize,
             tracking_sensor,
-            user_keys,
         )
         from seatrack.filters.registry import METHODS
         from seatrack.report.plots import error_figure, save, track_figure
@@ -154,17 +153,11 @@ def register(app: typer.Typer) -> None:
         # 2. the methods on that run: plots
         sd = sim.sensor(sensor.name)
         configs = {m: method_config(sc, sensor, m) for m in methods}
-        res = run_methods(sd, methods, configs, user_keys={m: user_keys(sc, m) for m in methods})
+        res = run_methods(sd, methods, configs)
         for m, rr in res.items():
             for name, r in zip(sc.target_names, rr, strict=True):
                 if r.error:
                     typer.echo(f"{m} failed on {name}: {r.error}")
-            dropped = sorted({k for r in rr for k in r.dropped})
-            if dropped:
-                typer.echo(
-                    f"note: {m} does not accept {', '.join(dropped)}: "
-                    "it runs with its own noise settings"
-                )
         estimates = {m: [r.pos for r in rr if not r.error] for m, rr in res.items()}
         plots_xy = np.concatenate([_plot_xy(meas) for meas in sd.measurements])
         clutter_xy = None

@@ -75,7 +75,6 @@ def register(app: typer.Typer) -> None:
             run_methods,
             summarize,
             tracking_sensor,
-            user_keys,
         )
         from seatrack.simulate.scenarios import load_scenario, resolve_scenario
 
@@ -88,11 +87,9 @@ def register(app: typer.Typer) -> None:
         # and compiles the numba kernels before the timed runs (not part of the statistics)
         trial = sc.simulate(np.random.default_rng(np.random.SeedSequence(s).spawn(1)[0]))
         configs = {m: method_config(sc, sens, m) for m in names}
-        keys = {m: user_keys(sc, m) for m in names}
-        errors, notes = {}, {}
-        for m, rr in run_methods(trial.sensor(sens.name), names, configs, user_keys=keys).items():
+        errors = {}
+        for m, rr in run_methods(trial.sensor(sens.name), names, configs).items():
             errors[m] = next((r.error for r in rr if r.error), "")
-            notes[m] = sorted({k for r in rr for k in r.dropped})
         res = compare_methods(
             sc, names, n, s, sensor=sens.name, processes=processes, progress=progress
         )
@@ -113,11 +110,6 @@ def register(app: typer.Typer) -> None:
         for m, e in errors.items():
             if e:
                 typer.echo(f"{m} failed on this scenario: {e}")
-            elif notes[m]:
-                typer.echo(
-                    f"note: {m} does not accept {', '.join(notes[m])}: it ran with its own "
-                    "noise settings (set them under [evaluate." + m + "] in the scenario)"
-                )
         if crb is not None:
             rms = float(np.sqrt(np.nanmean(crb[:, skip:] ** 2)))
             console.print(

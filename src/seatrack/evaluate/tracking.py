@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import functools
 import math
-import re
 import time
 import warnings
 from collections.abc import Mapping, Sequence
@@ -37,10 +36,8 @@ from seatrack.simulate.scenarios import Scenario, SensorConfig, SensorData
 FloatArray = NDArray[np.float64]
 
 __all__ = [
-    "SENSOR_KEYS",
     "MethodRun",
     "method_config",
-    "user_keys",
     "run_methods",
     "tracking_sensor",
     "compare_methods",
@@ -83,20 +80,13 @@ def tracking_sensor(scenario: Scenario, name: str | None = None) -> SensorConfig
     raise ValueError(f"scenario {scenario.name!r} has no sensor {name!r}")
 
 
-#: configuration keys filled in from the scenario's sensor (a method that does not know one,
-#: e.g. a filter that ignores range rate, is run without it)
-SENSOR_KEYS = frozenset(
-    {"sigma_azimuth_deg", "sigma_range_m", "sigma_elevation_deg", "sigma_range_rate_mps"}
-)
-
-
 def method_config(scenario: Scenario, sensor: SensorConfig, method: str) -> dict[str, Any]:
     """Configuration passed to a method: the sensor's sigmas, then ``[evaluate.<method>]``.
 
     The sensor's noise standard deviations go in as ``sigma_azimuth_deg``,
-    ``sigma_range_m``, ``sigma_elevation_deg``, ``sigma_range_rate_mps`` (the keys of
-    :mod:`seatrack.filters.ekf`); a scenario table ``[evaluate.<method>]`` adds or
-    overrides keys.
+    ``sigma_range_m``, ``sigma_elevation_deg``, ``sigma_range_rate_mps`` -- the keys every
+    track method accepts (:data:`seatrack.filters.registry.COMMON_CONFIG_KEYS`); a scenario
+    table ``[evaluate.<method>]`` adds or overrides keys.
     """
     cfg: dict[str, Any] = {}
     keys = {
@@ -114,41 +104,6 @@ def method_config(scenario: Scenario, sensor: SensorConfig, method: str) -> dict
     return cfg
 
 
-def user_keys(scenario: Scenario, method: str) -> frozenset[str]:
-    """Keys of the scenario's ``[evaluate.<method>]`` table (never dropped on retry)."""
-    extra = scenario.extra.get(method, {})
-    return frozenset(extra) if isinstance(extra, Mapping) else frozenset()
-
-
-def _call(
-    fn: Any, plots: Any, cfg: dict[str, Any], droppable: set[str], dropped: list[str]
-) -> dict[str, Any]:
-    """Call a method; if it rejects automatically added sensor keys, drop them and retry.
-
-    A key counts as rejected when the method raises ``ValueError`` whose message says
-    "unknown" and names the key before any ``;`` (after which methods list the valid
-    keys). ``cfg``, ``droppable`` and ``dropped`` are updated in place so later calls
-    skip the retry.
-    """
-    while True:
-        try:
-            return fn(plots, cfg)  # type: ignore[no-any-return]
-        except ValueError as exc:
-            # the rejected keys are named before any "; valid keys: ..." list
-            msg = str(exc).split(";")[0]
-            bad = [
-                k
-                for k in sorted(droppable)
-                if k in cfg and "unknown" in msg and re.search(rf"\b{re.escape(k)}\b", msg)
-            ]
-            if not bad:
-                raise
-            for k in bad:
-                del cfg[k]
-                droppable.discard(k)
-                dropped.append(k)
-
-
 @dataclass(frozen=True)
 class MethodRun:
     """One method on one target: outputs on the full scan grid (NaN = no plot)."""
@@ -159,7 +114,6 @@ class MethodRun:
     seconds: float
     n_plots: int
     error: str = ""
-    dropped: tuple[str, ...] = ()  # sensor keys the method did not accept (ran on its defaults)
 
 
 def run_methods(
@@ -167,7 +121,6 @@ def run_methods(
     methods: Sequence[str],
     configs: Mapping[str, Mapping[str, Any]],
     catch: bool = True,
-    user_keys: Mapping[str, frozenset[str]] | None = None,
 ) -> dict[str, list[MethodRun]]:
     """Run each method on each target's plots of one sensor.
 
@@ -177,8 +130,6 @@ def run_methods(
     methods : names in :data:`seatrack.filters.registry.METHODS`
     configs : method -> configuration (see :func:`method_config`)
     catch : record a method's exception as a failed run instead of raising
-    user_keys : method -> keys the user set explicitly; the other :data:`SENSOR_KEYS`
-        are dropped if the method rejects them as unknown
 
     Returns
     -------
@@ -190,8 +141,6 @@ def run_methods(
     for name in methods:
         fn = get_method(name)
         cfg = dict(configs.get(name, {}))
-        droppable = set(SENSOR_KEYS - (user_keys or {}).get(name, frozenset()))
-        dropped: list[str] = []
         runs = []
         for j, meas in enumerate(data.measurements):
             n = data.t.size
@@ -201,7 +150,7 @@ def run_methods(
             plots = plots_from_measurements(meas, str(j))
             t0 = time.perf_counter()
             try:
-                cols = _call(fn, plots, cfg, droppable, dropped)
+                cols = fn(plots, cfg)
             except Exception as exc:  # a failing method is reported, not fatal
                 if not catch:
                     raise
@@ -215,7 +164,7 @@ def run_methods(
                 pos[idx, k] = cols[f"{a}_m"]
                 vel[idx, k] = cols[f"v{a}_mps"]
                 std[idx, k] = cols[f"std_{a}_m"]
-            runs.append(MethodRun(pos, vel, std, dt, len(plots), "", tuple(dropped)))
+            runs.append(MethodRun(pos, vel, std, dt, len(plots)))
         out[name] = runs
     return out
 
@@ -227,11 +176,10 @@ def _mc_run(
     sensor: str,
     methods: tuple[str, ...],
     configs: Mapping[str, Mapping[str, Any]],
-    user_keys: Mapping[str, frozenset[str]],
 ) -> dict[str, Any]:
     sim = scenario.simulate(rng)
     data = sim.sensor(sensor)
-    res = run_methods(data, methods, configs, user_keys=user_keys)
+    res = run_methods(data, methods, configs)
     truth_pos = np.stack([tr.pos for tr in data.truth])  # (targets, N, 3)
     truth_vel = np.stack([tr.vel for tr in data.truth])
     out: dict[str, Any] = {}
@@ -272,14 +220,12 @@ def compare_methods(
             )
     s = tracking_sensor(scenario, sensor)
     configs = {m: method_config(scenario, s, m) for m in methods}
-    keys = {m: user_keys(scenario, m) for m in methods}
     fn = functools.partial(
         _mc_run,
         scenario=scenario,
         sensor=s.name,
         methods=tuple(methods),
         configs=configs,
-        user_keys=keys,
     )
     return monte_carlo(
         fn, runs, seed, processes=processes, progress=progress, description="evaluate"

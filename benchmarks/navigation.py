@@ -190,7 +190,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true", help="smoke run: 3 runs, 1 survey run")
     ap.add_argument("--runs", type=int, default=50)
-    ap.add_argument("--survey-runs", type=int, default=8)
+    ap.add_argument("--survey-runs", type=int, default=50)
     ap.add_argument("--passes", type=int, default=3)
     ap.add_argument("--seed", type=int, default=7)
     a = ap.parse_args()

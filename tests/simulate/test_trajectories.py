@@ -67,3 +67,16 @@ def test_invalid_legs_and_sampling():
     with pytest.raises(ValueError, match="negative"):
         trajectory([0, 0], 0, 1.0, [Leg(10, accel=-1.0)], dt=1)
     np.testing.assert_allclose(leg_times([Leg(2), Leg(3)], 10.0), [10, 12, 15])
+
+
+def test_closed_form_displacements_match_fine_simpson():
+    from seatrack.simulate.trajectories import _displacement, _displacements
+
+    rng = np.random.default_rng(0)
+    n = 500
+    c, s = rng.uniform(0, 2 * np.pi, n), rng.uniform(0, 30, n)
+    w = rng.choice([0.0, 1e-7, 2e-5, 0.01, -0.05], n)
+    a, vz, T = rng.choice([0.0, 0.3, -0.1], n), rng.normal(size=n), rng.uniform(0, 300, n)
+    fast = _displacements(c, s, w, a, vz, T, 0.25)
+    ref = np.array([_displacement(*x, 0.005) for x in zip(c, s, w, a, vz, T, strict=True)])
+    np.testing.assert_allclose(fast, ref, atol=1e-6)

@@ -5,9 +5,10 @@ A trajectory starts at a position with a course and speed and follows a list of
 acceleration and the vertical rate are constant. That covers constant-velocity legs,
 coordinated turns, accelerations / speed changes and climbs, in 2-D or 3-D.
 
-Integration is exact in course and speed (both are closed-form in time) and uses
-Simpson's rule on sub-steps of at most ``max_substep`` seconds for the position
-integral, so the truth is accurate to far below any sensor noise.
+Course and speed are closed-form in time, and so is the position (the integrals of
+``(s + a t) sin(c + w t)`` and its cosine twin), evaluated for all samples at once; only
+turns so slight that the closed form would cancel badly fall back to Simpson's rule on
+sub-steps of at most ``max_substep`` seconds. The truth is exact to round-off.
 
 x East, y North, z Up; metres, seconds, radians; course clockwise from North.
 """
@@ -207,7 +208,16 @@ def trajectory(
         c_start[k], s_start[k], p_start[k] = c, s, p
         if k < len(legs):
             T = legs[k].duration
-            p = p + _displacement(c, s, w[k], a[k], vz[k], T, max_substep)
+            d = _displacements(
+                np.array([c]),
+                np.array([s]),
+                w[k : k + 1],
+                a[k : k + 1],
+                vz[k : k + 1],
+                np.array([T]),
+                max_substep,
+            )
+            p = p + d[0]
             c = c + w[k] * T
             s = s + a[k] * T
             if s < -1e-9:
@@ -215,13 +225,10 @@ def trajectory(
             s = max(s, 0.0)
 
     k_of = np.clip(np.searchsorted(leg_start, tt, side="right") - 1, 0, len(w) - 1)
-    pos = np.empty((tt.size, 3))
-    for i, (ti, k) in enumerate(zip(tt, k_of, strict=True)):
-        tau = ti - leg_start[k]
-        pos[i] = p_start[k] + _displacement(
-            c_start[k], s_start[k], w[k], a[k], vz[k], tau, max_substep
-        )
     tau = tt - leg_start[k_of]
+    pos = p_start[k_of] + _displacements(
+        c_start[k_of], s_start[k_of], w[k_of], a[k_of], vz[k_of], tau, max_substep
+    )
     crs = c_start[k_of] + w[k_of] * tau
     spd = s_start[k_of] + a[k_of] * tau
     vel = np.stack([spd * np.sin(crs), spd * np.cos(crs), vz[k_of]], -1)
@@ -236,6 +243,47 @@ def trajectory(
     return Trajectory(
         tt.astype(np.float64), pos, vel, acc, np.asarray(wrap_2pi(crs)), spd, w[k_of].astype(float)
     )
+
+
+def _displacements(
+    c: FloatArray,
+    s: FloatArray,
+    w: FloatArray,
+    a: FloatArray,
+    vz: FloatArray,
+    T: FloatArray,
+    h: float,
+) -> FloatArray:
+    """Displacements ``(N, 3)`` after ``T`` s with course ``c + w t`` and speed ``s + a t``.
+
+    Closed forms: straight (``w = 0``) and, for ``|w T| >= 1e-3``, the exact integrals
+    ``int (s + a t) sin(c + w t) dt = [-(s + a t) cos(c + w t) / w + a sin(c + w t) / w^2]``
+    (and the cosine twin), which hold for turns with or without speed change. Only turns
+    so slight that these cancel badly (``0 < |w T| < 1e-3`` with ``a != 0``) use Simpson's
+    rule on sub-steps of at most ``h`` s.
+    """
+    T = np.maximum(T, 0.0)
+    out = np.zeros((T.size, 3))
+    out[:, 2] = vz * T
+    straight = w == 0.0
+    d = s * T + 0.5 * a * T**2
+    out[straight, 0] = (d * np.sin(c))[straight]
+    out[straight, 1] = (d * np.cos(c))[straight]
+    turn = ~straight & (np.abs(w * T) >= 1e-3)
+    if turn.any():
+        cc, ss, ww, aa, TT = c[turn], s[turn], w[turn], a[turn], T[turn]
+        c1 = cc + ww * TT
+        s1 = ss + aa * TT
+        out[turn, 0] = (ss * np.cos(cc) - s1 * np.cos(c1)) / ww + aa * (
+            np.sin(c1) - np.sin(cc)
+        ) / ww**2
+        out[turn, 1] = (s1 * np.sin(c1) - ss * np.sin(cc)) / ww + aa * (
+            np.cos(c1) - np.cos(cc)
+        ) / ww**2
+    slight = ~straight & ~turn
+    for i in np.flatnonzero(slight):
+        out[i] = _displacement(c[i], s[i], w[i], a[i], vz[i], T[i], h)
+    return out
 
 
 def _displacement(

@@ -12,8 +12,9 @@ The small, stable public API every method in seatrack builds on:
 Compiled building blocks, for other Numba kernels (e.g. a whole filter loop compiled in
 one piece) so that they reuse this update rather than re-deriving it:
 :func:`predict_core` ``(x, P, F, Q, xo, Po)``, :func:`update_core`
-``(x, P, y, H, R, xo, Po, So, Ko) -> (nis, loglik)`` (Joseph form, given the innovation)
-and :func:`wrap_angle` (scalar wrap to ``(-pi, pi]``). They write into the output arrays
+``(x, P, y, H, R, xo, Po, So, Ko) -> (nis, loglik)`` (Joseph form, given the innovation),
+:func:`cholesky_core` ``(S, L) -> log det S``, :func:`forward_core` ``(L, y, w)`` and
+:func:`wrap_angle` (scalar wrap to ``(-pi, pi]``). They write into the output arrays
 and must be called from compiled code with contiguous float64 arrays.
 
 Shapes and broadcasting
@@ -53,6 +54,8 @@ from numpy.typing import ArrayLike, NDArray
 FloatArray = NDArray[np.float64]
 
 __all__ = [
+    "cholesky_core",
+    "forward_core",
     "predict_core",
     "update_core",
     "wrap_angle",
@@ -125,13 +128,49 @@ def _cov_predict_kernel(P, F, Q, Po):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def cholesky_core(S, L):  # pragma: no cover - compiled
+    """Cholesky ``S = L L^T`` of a small SPD matrix into ``L``; returns ``log det S``.
+
+    Returns NaN (``L`` then incomplete) when ``S`` is not positive definite.
+    """
+    m = S.shape[0]
+    L[:, :] = 0.0
+    logdet = 0.0
+    for j in range(m):
+        d = S[j, j]
+        for k in range(j):
+            d -= L[j, k] * L[j, k]
+        if not d > 0.0:
+            return np.nan
+        d = math.sqrt(d)
+        L[j, j] = d
+        logdet += 2.0 * math.log(d)
+        for i in range(j + 1, m):
+            v = S[i, j]
+            for k in range(j):
+                v -= L[i, k] * L[j, k]
+            L[i, j] = v / d
+    return logdet
+
+
+@njit(cache=True)
+def forward_core(L, y, w):  # pragma: no cover - compiled
+    """Forward substitution ``w = L^-1 y`` for lower-triangular ``L``."""
+    for i in range(y.shape[0]):
+        v = y[i]
+        for k in range(i):
+            v -= L[i, k] * w[k]
+        w[i] = v / L[i, i]
+
+
+@njit(cache=True)
 def update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
     """Joseph-form update given the innovation ``y``; returns (nis, loglik)."""
     n = x.shape[0]
     m = y.shape[0]
     # one scratch allocation for every temporary (views below): allocations dominate
     # the cost of small updates in batch mode
-    buf = np.empty(2 * n * m + m * m + 2 * m + 2 * n * n + n * m)
+    buf = np.empty(2 * n * m + m * m + 2 * m + 2 * n * n)
     o = 0
     PHt = buf[o : o + n * m].reshape((n, m))
     o += n * m
@@ -162,41 +201,19 @@ def update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
             v = s + 0.5 * (R[i, j] + R[j, i])
             So[i, j] = v
             So[j, i] = v
-    # Cholesky S = L L^T
-    L[:, :] = 0.0
-    logdet = 0.0
-    for j in range(m):
-        d = So[j, j]
-        for k in range(j):
-            d -= L[j, k] * L[j, k]
-        if not d > 0.0:
-            for i in range(n):
-                xo[i] = np.nan
-            return np.nan, np.nan
-        d = math.sqrt(d)
-        L[j, j] = d
-        logdet += 2.0 * math.log(d)
-        for i in range(j + 1, m):
-            s = So[i, j]
-            for k in range(j):
-                s -= L[i, k] * L[j, k]
-            L[i, j] = s / d
-    # w = L^-1 y ; nis = w.w
-    for i in range(m):
-        s = y[i]
-        for k in range(i):
-            s -= L[i, k] * w[k]
-        w[i] = s / L[i, i]
+    # Cholesky S = L L^T; w = L^-1 y; nis = w.w
+    logdet = cholesky_core(So, L)
+    if not logdet == logdet:  # NaN: S not positive definite
+        for i in range(n):
+            xo[i] = np.nan
+        return np.nan, np.nan
+    forward_core(L, y, w)
     nis = 0.0
     for i in range(m):
         nis += w[i] * w[i]
     # K = PHt S^-1: solve L L^T K^T = PHt^T row by row of PHt
     for r in range(n):
-        for i in range(m):
-            s = PHt[r, i]
-            for k in range(i):
-                s -= L[i, k] * t[k]
-            t[i] = s / L[i, i]
+        forward_core(L, PHt[r], t)
         for i in range(m - 1, -1, -1):
             s = t[i]
             for k in range(i + 1, m):

@@ -62,7 +62,7 @@ from numba import guvectorize, njit
 from numpy.typing import ArrayLike, NDArray
 
 from seatrack.geometry import G0
-from seatrack.kalman import update_core
+from seatrack.kalman import cholesky_core, forward_core, update_core
 
 FloatArray = NDArray[np.float64]
 
@@ -286,51 +286,12 @@ class MultiModelResult:
 # Compiled scan (steps 1-11 for one track)
 # ---------------------------------------------------------------------------
 @njit(cache=True)
-def _chol(S, L):  # pragma: no cover - compiled
-    """Cholesky ``S = L L^T`` of a small SPD matrix; returns log det S (NaN if not PD)."""
-    m = S.shape[0]
-    logdet = 0.0
-    for j in range(m):
-        for i in range(m):
-            L[j, i] = 0.0
-    for j in range(m):
-        dd = S[j, j]
-        for k in range(j):
-            dd -= L[j, k] * L[j, k]
-        if not dd > 0.0:
-            return np.nan
-        dd = math.sqrt(dd)
-        L[j, j] = dd
-        logdet += 2.0 * math.log(dd)
-        for i in range(j + 1, m):
-            s = S[i, j]
-            for k in range(j):
-                s -= L[i, k] * L[j, k]
-            L[i, j] = s / dd
-    return logdet
-
-
-@njit(cache=True)
-def _fwd(L, y, w):  # pragma: no cover - compiled
-    """Forward substitution ``w = L^-1 y``."""
-    for i in range(y.shape[0]):
-        s = y[i]
-        for k in range(i):
-            s -= L[i, k] * w[k]
-        w[i] = s / L[i, i]
-
-
-@njit(cache=True)
 def _maha(L, y):  # pragma: no cover - compiled
     """``y^T (L L^T)^-1 y`` by forward substitution."""
-    m = y.shape[0]
-    w = np.empty(m)
+    w = np.empty(y.shape[0])
+    forward_core(L, y, w)
     acc = 0.0
-    for i in range(m):
-        s = y[i]
-        for k in range(i):
-            s -= L[i, k] * w[k]
-        w[i] = s / L[i, i]
+    for i in range(y.shape[0]):
         acc += w[i] * w[i]
     return acc
 
@@ -410,7 +371,7 @@ def _step_core(
         for j in range(d):
             S[i, j] = Pb[i, j] + 0.5 * (R[i, j] + R[j, i])
     L = np.empty((d, d))
-    logdet = _chol(S, L)
+    logdet = cholesky_core(S, L)
     if not math.isfinite(logdet):
         for i in range(n):
             xo[i] = np.nan
@@ -454,8 +415,8 @@ def _step_core(
             if use_rr == 2.0:  # joint: condition the range rate on the position innovation
                 for i in range(d):
                     y[i] = Z[i] - xc[i] - T2 * alphas[a, i]
-                _fwd(L, c, wc)
-                _fwd(L, y, wy)
+                forward_core(L, c, wc)
+                forward_core(L, y, wy)
                 for i in range(d):
                     e -= wc[i] * wy[i]
                     s -= wc[i] * wc[i]
@@ -529,7 +490,7 @@ def _step_core(
         y[i] = Z[i] - xp[i]
         for j in range(d):
             S[i, j] = Pp[i, j] + 0.5 * (R[i, j] + R[j, i])
-    nis = _maha(L, y) if math.isfinite(_chol(S, L)) else np.nan
+    nis = _maha(L, y) if math.isfinite(cholesky_core(S, L)) else np.nan
     return lse, nis
 
 

@@ -24,6 +24,7 @@ import math  # noqa: E402
 import sys  # noqa: E402
 import tempfile  # noqa: E402
 import time  # noqa: E402
+from dataclasses import replace  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -144,6 +145,12 @@ def run_file(path: Path, cfg: AisTrackerConfig, out_dir: Path) -> dict[str, floa
     t2 = time.perf_counter()
     write_tracks_csv(out_dir / "TRACKS.csv", r, track_columns(tr))
     t3 = time.perf_counter()
+    # the tracking stage again, best of 3 (the machine's timing noise is +-30 %)
+    track_best = t2 - t1
+    for _ in range(2):
+        s = time.perf_counter()
+        track_reports(r, cfg)
+        track_best = min(track_best, time.perf_counter() - s)
     # the tracking kernel alone (local frame precomputed), best of 3
     fr = to_local(r)
     ok = r.valid
@@ -157,12 +164,12 @@ def run_file(path: Path, cfg: AisTrackerConfig, out_dir: Path) -> dict[str, floa
         "n": n,
         "vessels": float(np.unique(r.mmsi[ok]).size),
         "read": t1 - t0,
-        "track": t2 - t1,
+        "track": track_best,
         "kernel": best,
         "write": t3 - t2,
         "e2e": t3 - t0,
         "rate_e2e": n / (t3 - t0),
-        "rate_track": n / (t2 - t1),
+        "rate_track": n / track_best,
         "rate_kernel": int(ok.sum()) / best,
     }
 
@@ -190,6 +197,9 @@ def main(argv: list[str] | None = None) -> int:
         synthetic_csv(syn, n_syn)
         gen = time.perf_counter() - s
         rows.append((f"synthetic_{n_syn // 1000}k.csv", run_file(syn, cfg, tmpd)))
+        # the same file without the refinement pass (timestamp offsets, steady/manoeuvring
+        # choice): what the refinement costs
+        fast = run_file(syn, replace(cfg, refine=False), tmpd)
         anchor = python_loop_anchor(DATA / REAL[2], 5_000 if args.quick else 20_000, cfg)
     hdr = (
         f"{'file':38s} {'reports':>9s} {'vessels':>7s} {'read s':>7s} {'track s':>7s} "
@@ -211,9 +221,13 @@ def main(argv: list[str] | None = None) -> int:
         f"{'yes' if anchor >= TARGET else 'NO':>6s}"
     )
     print(
-        f"(track = whole tracking stage: local frame, tracker with revisit passes and RTS, "
-        f"back to lat/lon and true course; kernel = compiled tracker alone, best of 3; "
-        f"synthetic file generated in {gen:.1f} s)"
+        f"(track = whole tracking stage, best of 3: local frame, tracker with revisit passes, "
+        f"refinement pass and RTS, back to lat/lon and true course; kernel = compiled tracker "
+        f"alone, best of 3; e2e = one run; synthetic file generated in {gen:.1f} s)"
+    )
+    print(
+        f"synthetic without the refinement pass (refine=False): track {fast['rate_track']:,.0f} "
+        f"rep/s, kernel {fast['rate_kernel']:,.0f} rep/s"
     )
     return 0
 

@@ -114,3 +114,22 @@ def test_units():
     assert g.bearing_rad_to_deg(-math.radians(10)) == pytest.approx(350.0)
     assert g.bearing_rad_to_deg(2 * math.pi) == 0.0
     assert math.isclose(g.bearing_deg_to_rad(370.0), math.radians(10))
+
+
+def test_enu_per_point_origins_equal_one_call_per_origin():
+    """Arrays of origins (one per point) give exactly the per-origin results, both ways."""
+    rng = np.random.default_rng(3)
+    lat0 = rng.uniform(-70, 70, 50)
+    lon0 = rng.uniform(-180, 180, 50)
+    lat = lat0 + rng.uniform(-0.5, 0.5, 50)
+    lon = lon0 + rng.uniform(-0.5, 0.5, 50)
+    h = rng.uniform(-50, 50, 50)
+    enu = g.geodetic_to_enu(lat, lon, h, lat0, lon0)
+    one = np.array(
+        [g.geodetic_to_enu(a, b, c, d, e) for a, b, c, d, e in zip(lat, lon, h, lat0, lon0)]
+    )
+    assert enu.shape == (50, 3)
+    assert np.allclose(enu, one, atol=1e-6)
+    la, lo, hh = g.enu_to_geodetic(enu, lat0, lon0)
+    assert np.allclose(la, lat, atol=1e-10) and np.allclose(lo, lon, atol=1e-10)
+    assert np.allclose(hh, h, atol=1e-6)

@@ -149,56 +149,66 @@ def _transformers() -> tuple[Any, Any]:
     return fwd, inv
 
 
-def _enu_rotation(lat0: float, lon0: float) -> FloatArray:
-    sl, cl = np.sin(np.radians(lat0)), np.cos(np.radians(lat0))
-    so, co = np.sin(np.radians(lon0)), np.cos(np.radians(lon0))
-    # rows: East, North, Up unit vectors in ECEF
-    return np.array(
-        [
-            [-so, co, 0.0],
-            [-sl * co, -sl * so, cl],
-            [cl * co, cl * so, sl],
-        ]
-    )
+def _enu_rotation(lat0: ArrayLike, lon0: ArrayLike) -> FloatArray:
+    """Rotation ECEF -> local ENU at (lat0, lon0) (deg): ``(..., 3, 3)``, rows East, North,
+    Up unit vectors in ECEF (one matrix per origin for array inputs)."""
+    p, lam = np.radians(np.asarray(lat0, float)), np.radians(np.asarray(lon0, float))
+    sl, cl = np.sin(p), np.cos(p)
+    so, co = np.sin(lam), np.cos(lam)
+    z = np.zeros_like(sl)
+    rows = [[-so, co, z], [-sl * co, -sl * so, cl], [cl * co, cl * so, sl]]
+    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
 
 
 def geodetic_to_enu(
     lat_deg: ArrayLike,
     lon_deg: ArrayLike,
     h_m: ArrayLike,
-    lat0_deg: float,
-    lon0_deg: float,
-    h0_m: float = 0.0,
+    lat0_deg: ArrayLike,
+    lon0_deg: ArrayLike,
+    h0_m: ArrayLike = 0.0,
 ) -> FloatArray:
     """WGS84 geodetic (deg, deg, m) to local East-North-Up (m) about an origin.
 
     Exact (no flat-earth approximation): geodetic -> ECEF via PROJ, then the rotation to
-    the local tangent plane at ``(lat0, lon0, h0)``. Returns ``(..., 3)``.
+    the local tangent plane at ``(lat0, lon0, h0)``. The origin may be one point or one
+    per point (arrays broadcasting with the points). Returns ``(..., 3)``.
     """
     fwd, _ = _transformers()
-    lat = np.asarray(lat_deg, dtype=float)
-    lon = np.asarray(lon_deg, dtype=float)
-    h = np.broadcast_to(np.asarray(h_m, dtype=float), np.broadcast_shapes(lat.shape, lon.shape))
-    lat, lon = np.broadcast_arrays(lat, lon)
+    lat, lon, h, la0, lo0, h0 = np.broadcast_arrays(
+        *(np.asarray(a, dtype=float) for a in (lat_deg, lon_deg, h_m, lat0_deg, lon0_deg, h0_m))
+    )
     X, Y, Z = fwd.transform(lon, lat, h)
-    X0, Y0, Z0 = fwd.transform(lon0_deg, lat0_deg, h0_m)
+    if np.ndim(lat0_deg) == 0 and np.ndim(lon0_deg) == 0 and np.ndim(h0_m) == 0:
+        X0, Y0, Z0 = fwd.transform(float(lon0_deg), float(lat0_deg), float(h0_m))  # type: ignore[arg-type]
+        d = np.stack([np.asarray(X) - X0, np.asarray(Y) - Y0, np.asarray(Z) - Z0], axis=-1)
+        return d @ _enu_rotation(lat0_deg, lon0_deg).T
+    X0, Y0, Z0 = fwd.transform(lo0, la0, h0)
     d = np.stack([np.asarray(X) - X0, np.asarray(Y) - Y0, np.asarray(Z) - Z0], axis=-1)
-    return d @ _enu_rotation(lat0_deg, lon0_deg).T
+    return np.einsum("...ij,...j->...i", _enu_rotation(la0, lo0), d)
 
 
 def enu_to_geodetic(
-    enu: ArrayLike, lat0_deg: float, lon0_deg: float, h0_m: float = 0.0
+    enu: ArrayLike, lat0_deg: ArrayLike, lon0_deg: ArrayLike, h0_m: ArrayLike = 0.0
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Local East-North-Up ``(..., 3)`` (or ``(..., 2)``, Up = 0) to WGS84 (lat, lon, h).
 
-    Inverse of :func:`geodetic_to_enu`; returns degrees, degrees, metres.
+    Inverse of :func:`geodetic_to_enu` (one origin, or one per point); returns degrees,
+    degrees, metres.
     """
     fwd, inv = _transformers()
     e = np.asarray(enu, dtype=float)
     if e.shape[-1] == 2:
         e = np.concatenate([e, np.zeros(e.shape[:-1] + (1,))], axis=-1)
-    X0, Y0, Z0 = fwd.transform(lon0_deg, lat0_deg, h0_m)
-    d = e @ _enu_rotation(lat0_deg, lon0_deg)
+    if np.ndim(lat0_deg) == 0 and np.ndim(lon0_deg) == 0 and np.ndim(h0_m) == 0:
+        X0, Y0, Z0 = fwd.transform(lon0_deg, lat0_deg, h0_m)
+        d = e @ _enu_rotation(lat0_deg, lon0_deg)
+    else:
+        la0, lo0, h0 = np.broadcast_arrays(
+            *(np.asarray(a, dtype=float) for a in (lat0_deg, lon0_deg, h0_m))
+        )
+        X0, Y0, Z0 = fwd.transform(lo0, la0, h0)
+        d = np.einsum("...ji,...j->...i", _enu_rotation(la0, lo0), e)
     lon, lat, h = inv.transform(d[..., 0] + X0, d[..., 1] + Y0, d[..., 2] + Z0)
     return np.asarray(lat, float), np.asarray(lon, float), np.asarray(h, float)
 

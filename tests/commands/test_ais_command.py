@@ -46,8 +46,14 @@ def test_ais_command_writes_every_row(tmp_path: Path) -> None:
         "std_pos_m",
         "outlier",
         "reject_reason",
+        "time_offset_s",
     ):
         assert col in rows[0]
+    # whole-second timestamp offsets estimated on the Danish file (about one report in
+    # eight there), whole numbers in -2..2 on the used rows
+    offs = [float(r["time_offset_s"]) for r in rows if r["time_offset_s"]]
+    assert set(offs) <= {-2.0, -1.0, 0.0, 1.0, 2.0}
+    assert 0.05 < sum(o != 0 for o in offs) / len(offs) < 0.3
     assert f"rows read: {n_in}" in res.output
     assert "duplicate report: 407" in res.output
     # vessels contiguous in order of first appearance; input order (file, line) within each

@@ -15,6 +15,7 @@ from seatrack.filters.ais_tracker import (
     ct_step,
     position_noise,
     sogcog_model,
+    timestamp_offsets,
     track_reports,
     track_vessels,
 )
@@ -365,17 +366,13 @@ def test_real_holdout_beats_linear_interpolation() -> None:
     print("\n".join(lines))
     for k, (a, b, c, d) in stats.items():
         print(f"pooled {k:7s} median {a:5.2f} vs {b:5.2f} m   p95 {c:6.2f} vs {d:6.2f} m")
-    # the 95th percentile is better in every file and overall; on moving vessels the median
-    # is too; on the sparse (1-minute) file both are clearly better, and the median is
-    # better on the Norwegian file. On the dense Danish files (and the 49 withheld reports
-    # of Gothenburg) the median favours interpolation: the report errors there are
-    # correlated between neighbours (positions rounded to a grid, a vessel at rest
-    # repeating its position, timestamps off by whole seconds for single reports), which
-    # the nearest two reports carry and no smooth track predicts; least-squares local
-    # polynomial fits through 4-6 neighbours lose the median to interpolation there too.
-    assert all(a < b for a, b in per_file)  # 95th percentile better in every file
-    for name in ("no_vestland_20220901.csv", "us_boston_201401_trajectools.csv"):
+    # median and 95th percentile better in every file (withholding the 2nd, 3rd or 4th of
+    # each five instead, the 95th percentile of the two dense Danish files is within 5 % of
+    # interpolation's, on either side; the medians stay better)
+    for name in FILES:
         assert med_file[name][0] < med_file[name][1], name
+    assert all(a < b for a, b in per_file)
+    assert stats["all"][0] < stats["all"][1]
     assert stats["all"][2] < stats["all"][3]
     assert stats["moving"][0] < stats["moving"][1]
     assert stats["moving"][2] < stats["moving"][3]
@@ -393,6 +390,18 @@ def test_real_estimated_noise_improves_dense_files() -> None:
         fix = np.median(_holdout(r, fixed)[0])
         print(f"{name}: hold-out median {est:.2f} m (estimated noise) vs {fix:.2f} m (fixed)")
         assert est < 0.95 * fix
+
+
+def test_real_refinement_improves_dense_files() -> None:
+    """The refinement pass (whole-second timestamp offsets, steady or manoeuvring process
+    noise per vessel) lowers the hold-out median on the files with whole-second stamps."""
+    coarse = AisTrackerConfig(refine=False)
+    for name in FILES[1:4]:
+        r = read_ais_csv(data_file(name))
+        ref = np.median(_holdout(r)[0])
+        raw = np.median(_holdout(r, coarse)[0])
+        print(f"{name}: hold-out median {ref:.3f} m (refined) vs {raw:.3f} m (refine=False)")
+        assert ref < 0.9 * raw
 
 
 # ---------------------------------------------------------------------------
@@ -467,3 +476,143 @@ def test_course_is_referred_to_true_north_far_from_the_frame_origin(tmp_path: Pa
     # in the frame's plane the same motion points ~2 deg off East
     plane = np.degrees(bearing(np.gradient(tr.x_m, t), np.gradient(tr.y_m, t)))
     assert np.abs(plane[far] - 90.0).min() > 1.5
+
+
+# ---------------------------------------------------------------------------
+# whole-second timestamp offsets and the refinement pass
+# ---------------------------------------------------------------------------
+def _offset_vessels(
+    seed: int, p_off: float, sigma: float = 0.3, integer_times: bool = True
+) -> dict[str, np.ndarray]:
+    """Eight vessels at 4-9 m/s (straight, then a 60 deg turn), reports every 2-12 s logged at
+    whole seconds; a report stamped ``d`` s late shows the position at ``t - d``, ``d`` = +-1
+    with probability ``p_off`` each side; white position noise ``sigma`` (m)."""
+    rng = np.random.default_rng(seed)
+    out: dict[str, list[np.ndarray]] = {k: [] for k in ("vessel", "t", "z", "truth", "d")}
+    for v in range(8):
+        t = np.cumsum(rng.uniform(2.0, 12.0, 300))
+        if integer_times:
+            t = np.round(t)
+        d = rng.choice([-1.0, 0.0, 1.0], t.size, p=[p_off, 1 - 2 * p_off, p_off])
+        legs = [Leg.straight(600.0), Leg.turn(math.radians(60.0), math.radians(0.5))]
+        legs += [Leg.straight(3000.0)]
+        speed = rng.uniform(4.0, 9.0)
+        course = rng.uniform(0, 2 * math.pi)
+        seen = trajectory([0.0, 0.0], course, speed, legs, times=t - d).pos[:, :2]
+        truth = trajectory([0.0, 0.0], course, speed, legs, times=t).pos[:, :2]
+        out["vessel"].append(np.full(t.size, v))
+        out["t"].append(t)
+        out["z"].append(seen + rng.normal(0.0, sigma, (t.size, 2)))
+        out["truth"].append(truth)
+        out["d"].append(d)
+    return {k: np.concatenate(a) for k, a in out.items()}
+
+
+def test_whole_second_timestamp_offsets_are_found_and_modelled() -> None:
+    s = _offset_vessels(11, p_off=0.1)
+    st = track_vessels(s["vessel"], s["t"], s["z"], CFG)
+    coarse = track_vessels(s["vessel"], s["t"], s["z"], AisTrackerConfig(refine=False))
+    hit = np.mean(st.time_offset == s["d"])
+    found = np.mean(st.time_offset[s["d"] != 0] == s["d"][s["d"] != 0])
+    false = np.mean(st.time_offset[s["d"] == 0] != 0)
+    print(f"offsets right for {hit:.3f} of the reports; {found:.3f} of the offsets found, ")
+    print(f"{false:.3f} of the exact reports given one")
+    # (~20 % of the reports are offset; the errors are mostly near the turn and the ends)
+    assert hit > 0.88
+    assert found > 0.6 and false < 0.1
+    # offsets are logged minus true time, in whole seconds
+    assert set(np.unique(st.time_offset)) <= {-2.0, -1.0, 0.0, 1.0, 2.0}
+    # the state stays at the logged time: position error against the truth at t
+    err = np.hypot(*(st.state[:, :2] - s["truth"]).T)
+    err0 = np.hypot(*(coarse.state[:, :2] - s["truth"]).T)
+    print(
+        f"median position error {np.median(err):.2f} m with offsets, "
+        f"{np.median(err0):.2f} m without"
+    )
+    assert np.median(err) < 0.5 * np.median(err0)
+    assert np.median(err) < 1.1774 * 0.3  # median 2-D error of an exact report (Rayleigh)
+
+
+def test_no_offsets_where_the_data_show_none() -> None:
+    # precise timestamps (not whole seconds) and 4 m noise: an offset cannot show
+    s = _offset_vessels(12, p_off=0.0, sigma=4.0, integer_times=False)
+    st = track_vessels(s["vessel"], s["t"], s["z"], CFG)
+    assert np.all(st.time_offset == 0.0)
+    # offsets of 1 s would show (0.3 m noise) but there are none: the share test
+    s = _offset_vessels(13, p_off=0.0)
+    st = track_vessels(s["vessel"], s["t"], s["z"], CFG)
+    assert np.mean(st.time_offset != 0.0) < CFG.min_offset_share
+
+
+def _displaced(seed: int, n: int = 400) -> dict[str, np.ndarray]:
+    """Reports displaced by d s along known velocities (0.2 m noise, 0.1 s timing)."""
+    rng = np.random.default_rng(seed)
+    v = np.c_[rng.uniform(3, 8, n), rng.uniform(-2, 2, n)]
+    p = rng.normal(0.0, 100.0, (n, 2))
+    d = rng.choice([-2.0, -1.0, 0.0, 1.0, 2.0], n, p=[0.02, 0.13, 0.7, 0.13, 0.02])
+    z = p - v * d[:, None] + rng.normal(0.0, 0.2, (n, 2))
+    sig = np.c_[np.full(n, 0.2), np.full(n, 0.1)]
+    return {"v": v, "p": p, "d": d, "z": z, "sig": sig, "state": np.c_[p, v, np.zeros(n)]}
+
+
+def test_timestamp_offsets_score_against_an_exact_track() -> None:
+    """The MAP offset of reports displaced by d s along a known (exact) track is d."""
+    s = _displaced(4)
+    n = s["d"].size
+    zero_cov = np.zeros((n, 2, 2))
+    use = np.ones(n, bool)
+    got = timestamp_offsets(s["z"], s["state"], zero_cov, s["sig"], np.zeros(n), use, CFG)
+    assert np.mean(got == s["d"]) > 0.99
+    # against a track made with the true offsets already applied: the same answer
+    z_shift = s["z"]
+    got2 = timestamp_offsets(z_shift, s["state"], zero_cov, s["sig"], s["d"], use, CFG)
+    assert np.array_equal(got, got2)
+    # unusable rows and rows without a state are 0
+    state = s["state"].copy()
+    state[:10] = np.nan
+    use[10:20] = False
+    got = timestamp_offsets(s["z"], state, zero_cov, s["sig"], np.zeros(n), use, CFG)
+    assert np.all(got[:20] == 0.0)
+    off = AisTrackerConfig(max_time_offset_s=0)
+    assert np.all(timestamp_offsets(s["z"], state, zero_cov, s["sig"], np.zeros(n), use, off) == 0)
+
+
+def test_timestamp_offsets_leave_one_out_undoes_the_pull_of_the_report() -> None:
+    """A smoothed track that used the report sits between the report and the track of the
+    other reports: ``r = R (M + R)^-1 e`` with ``A = M (M + R)^-1 R`` its covariance. Given
+    ``A``, the leave-one-out residual recovers the offsets that the shrunk residual hides."""
+    s = _displaced(5)
+    n = s["d"].size
+    v = s["v"]
+    sp = 0.2
+    st = 0.29  # the timestamp sigma of the run that made the track
+    R = sp**2 * np.eye(2) + st**2 * v[:, :, None] * v[:, None, :]
+    M = np.broadcast_to(np.diag([1.5, 1.5]), (n, 2, 2))  # prediction from the others
+    e = s["z"] - s["p"]  # residual against the others' track (= -v d + noise)
+    MR = np.linalg.inv(M + R)
+    r = np.einsum("nij,njk,nk->ni", R, MR, e)
+    A = M @ MR @ R
+    sig = np.c_[np.full(n, sp), np.full(n, st)]
+    state = np.c_[s["z"] - r, v, np.zeros(n)]  # the smoothed track
+    use = np.ones(n, bool)
+    loo = timestamp_offsets(s["z"], state, A, sig, np.zeros(n), use, CFG)
+    shrunk = timestamp_offsets(s["z"], state, A, sig, np.zeros(n), use, CFG, leave_one_out=False)
+    print(
+        f"right: leave-one-out {np.mean(loo == s['d']):.3f}, "
+        f"smoothed {np.mean(shrunk == s['d']):.3f}"
+    )
+    assert np.mean(loo == s["d"]) > 0.99
+    assert np.mean(shrunk == s["d"]) < 0.95
+
+
+@pytest.mark.parametrize("name", FILES)
+def test_real_states_stay_within_physical_limits(name: str) -> None:
+    """Speed <= max_speed_kn and |turn rate| <= min(max_turn_rate_dps, max_accel / speed)
+    on every output row (the filter and the smoother are both projected)."""
+    r, tr = tracked(name)
+    ok = np.isfinite(tr.speed)
+    vmax = CFG.max_speed_kn * KNOT_MPS
+    assert np.all(tr.speed[ok] <= vmax * (1 + 1e-9))
+    with np.errstate(divide="ignore"):
+        lim = np.minimum(math.radians(CFG.max_turn_rate_dps), CFG.max_accel_mps2 / tr.speed[ok])
+    assert np.all(np.abs(tr.turn_rate[ok]) <= lim * (1 + 1e-9))

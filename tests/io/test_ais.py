@@ -247,7 +247,7 @@ def test_from_local_with_a_vessel_without_estimates() -> None:
     east, north = fr.enu[:, 0].copy(), fr.enu[:, 1].copy()
     first = r.mmsi == np.unique(r.mmsi)[0]
     east[first] = np.nan
-    lat, lon = from_local(east, north, fr.lat0, fr.lon0, group=fr.group)
+    lat, lon = from_local(east, north, fr.lat0, fr.lon0)
     assert np.isnan(lat[first]).all()
     assert np.abs(lat[~first] - r.lat[~first]).max() < 1e-9
 

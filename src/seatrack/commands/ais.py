@@ -89,6 +89,7 @@ def track_columns(tracks: Any) -> dict[str, np.ndarray]:
         "std_turn_rate_dps": np.degrees(tracks.std_turn_rate),
         "x_m": tracks.x_m,
         "y_m": tracks.y_m,
+        "time_offset_s": tracks.time_offset_s,
         "outlier": tracks.outlier,
         "outlier_reason": np.array(
             [OUTLIER_KINDS.get(int(k), "") for k in tracks.outlier_kind], dtype=object

@@ -480,25 +480,6 @@ class LocalFrame:
     group: NDArray[np.int64] | None = None
 
 
-def _groups(group: NDArray[np.int64]) -> list[NDArray[np.int64]]:
-    """Row indices of each group id >= 0 that has rows, by one stable sort.
-
-    Ids need not be contiguous: an id with no rows (e.g. a vessel none of whose rows has an
-    estimate) gives no group rather than an empty one.
-    """
-    idx = np.flatnonzero(group >= 0)
-    if idx.size == 0:
-        return []
-    g = group[idx]
-    order = np.argsort(g, kind="stable")
-    bounds = np.searchsorted(g[order], np.arange(int(g.max()) + 2))
-    return [
-        idx[order[bounds[k] : bounds[k + 1]]]
-        for k in range(bounds.size - 1)
-        if bounds[k + 1] > bounds[k]
-    ]
-
-
 def to_local(r: AisReports) -> LocalFrame:
     """Usable reports to a local East-North-Up frame, one tangent-plane origin per vessel.
 
@@ -516,11 +497,10 @@ def to_local(r: AisReports) -> LocalFrame:
         return LocalFrame(enu, lat0, lon0, group)
     vessels, first = np.unique(r.mmsi[ok], return_index=True)
     group[ok] = np.searchsorted(vessels, r.mmsi[ok])
-    for k, rows in enumerate(_groups(group)):
-        la0, lo0 = float(r.lat[ok[first[k]]]), float(r.lon[ok[first[k]]])
-        enu[rows] = geodetic_to_enu(r.lat[rows], r.lon[rows], 0.0, la0, lo0)
-        lat0[rows] = la0
-        lon0[rows] = lo0
+    # origin of each vessel: its first usable report; all rows in one vectorised call
+    lat0[ok] = r.lat[ok[first]][group[ok]]
+    lon0[ok] = r.lon[ok[first]][group[ok]]
+    enu[ok] = geodetic_to_enu(r.lat[ok], r.lon[ok], 0.0, lat0[ok], lon0[ok])
     return LocalFrame(enu, lat0, lon0, group)
 
 
@@ -530,7 +510,6 @@ def from_local(
     lat0: FloatArray,
     lon0: FloatArray,
     iterations: int = 2,
-    group: NDArray[np.int64] | None = None,
 ) -> tuple[FloatArray, FloatArray]:
     """Tangent-plane (East, North) about per-row origins back to WGS84 (lat, lon) at sea level.
 
@@ -539,8 +518,7 @@ def from_local(
     within metres of the ellipsoid at 100 km, which moves lat/lon by centimetres; one
     iteration brings it to the millimetre, two to well below 0.1 mm. Uses
     :func:`seatrack.geometry.enu_to_geodetic`.
-    ``group`` (rows sharing an origin, e.g. :attr:`LocalFrame.group`) saves finding the
-    origins. NaN inputs give NaN outputs.
+    All rows in one vectorised call (per-row origins). NaN inputs give NaN outputs.
     """
     e = np.asarray(east, float)
     nn = np.asarray(north, float)
@@ -549,20 +527,13 @@ def from_local(
     ok = np.isfinite(e) & np.isfinite(nn) & np.isfinite(lat0) & np.isfinite(lon0)
     if not ok.any():
         return lat, lon
-    if group is None:
-        keys = np.stack([lat0[ok], lon0[ok]], axis=1)
-        _, inv = np.unique(keys, axis=0, return_inverse=True)
-        group = np.full(e.shape, -1, dtype=np.int64)
-        group[ok] = inv.ravel()
-    for rows in _groups(np.where(ok, group, -1)):
-        E, N = e[rows], nn[rows]
-        U = -(E**2 + N**2) / (2.0 * 6_371_000.0)
-        la0, lo0 = float(lat0[rows[0]]), float(lon0[rows[0]])
-        for _ in range(iterations):
-            _, _, h = enu_to_geodetic(np.stack([E, N, U], -1), la0, lo0)
-            U = U - h
-        la, lo, _ = enu_to_geodetic(np.stack([E, N, U], -1), la0, lo0)
-        lat[rows], lon[rows] = la, lo
+    E, N = e[ok], nn[ok]
+    la0, lo0 = np.asarray(lat0, float)[ok], np.asarray(lon0, float)[ok]
+    U = -(E**2 + N**2) / (2.0 * 6_371_000.0)
+    for _ in range(iterations):
+        _, _, h = enu_to_geodetic(np.stack([E, N, U], -1), la0, lo0)
+        U = U - h
+    lat[ok], lon[ok], _ = enu_to_geodetic(np.stack([E, N, U], -1), la0, lo0)
     return lat, lon
 
 
@@ -635,6 +606,7 @@ TRACK_COLUMNS: dict[str, str] = {
     "std_turn_rate_dps": ".4f",
     "x_m": ".2f",
     "y_m": ".2f",
+    "time_offset_s": ".0f",
 }
 
 

@@ -150,14 +150,16 @@ def _transformers() -> tuple[Any, Any]:
 
 
 def _enu_rotation(lat0: ArrayLike, lon0: ArrayLike) -> FloatArray:
-    """Rotation ECEF -> local ENU at (lat0, lon0) (deg): ``(..., 3, 3)``, rows East, North,
-    Up unit vectors in ECEF (one matrix per origin for array inputs)."""
-    p, lam = np.radians(np.asarray(lat0, float)), np.radians(np.asarray(lon0, float))
-    sl, cl = np.sin(p), np.cos(p)
-    so, co = np.sin(lam), np.cos(lam)
-    z = np.zeros_like(sl)
-    rows = [[-so, co, z], [-sl * co, -sl * so, cl], [cl * co, cl * so, sl]]
-    return np.stack([np.stack(r, axis=-1) for r in rows], axis=-2)
+    """Rotation ECEF -> local ENU at (lat0, lon0) (deg); rows East, North, Up in ECEF."""
+    sl, cl = np.sin(np.radians(lat0)), np.cos(np.radians(lat0))
+    so, co = np.sin(np.radians(lon0)), np.cos(np.radians(lon0))
+    return np.array(
+        [
+            [-so, co, 0.0],
+            [-sl * co, -sl * so, cl],
+            [cl * co, cl * so, sl],
+        ]
+    )
 
 
 def geodetic_to_enu(
@@ -184,8 +186,14 @@ def geodetic_to_enu(
         d = np.stack([np.asarray(X) - X0, np.asarray(Y) - Y0, np.asarray(Z) - Z0], axis=-1)
         return d @ _enu_rotation(lat0_deg, lon0_deg).T
     X0, Y0, Z0 = fwd.transform(lo0, la0, h0)
-    d = np.stack([np.asarray(X) - X0, np.asarray(Y) - Y0, np.asarray(Z) - Z0], axis=-1)
-    return np.einsum("...ij,...j->...i", _enu_rotation(la0, lo0), d)
+    dx, dy, dz = np.asarray(X) - X0, np.asarray(Y) - Y0, np.asarray(Z) - Z0
+    p, lam = np.radians(la0), np.radians(lo0)
+    sl, cl, so, co = np.sin(p), np.cos(p), np.sin(lam), np.cos(lam)
+    # rows of the ENU rotation (see _enu_rotation), applied element-wise
+    east = -so * dx + co * dy
+    north = -sl * co * dx - sl * so * dy + cl * dz
+    up = cl * co * dx + cl * so * dy + sl * dz
+    return np.stack([east, north, up], axis=-1)
 
 
 def enu_to_geodetic(
@@ -208,7 +216,18 @@ def enu_to_geodetic(
             *(np.asarray(a, dtype=float) for a in (lat0_deg, lon0_deg, h0_m))
         )
         X0, Y0, Z0 = fwd.transform(lo0, la0, h0)
-        d = np.einsum("...ji,...j->...i", _enu_rotation(la0, lo0), e)
+        p, lam = np.radians(la0), np.radians(lo0)
+        sl, cl, so, co = np.sin(p), np.cos(p), np.sin(lam), np.cos(lam)
+        E, N, U = e[..., 0], e[..., 1], e[..., 2]
+        # the transposed rotation, element-wise
+        d = np.stack(
+            [
+                -so * E - sl * co * N + cl * co * U,
+                co * E - sl * so * N + cl * so * U,
+                cl * N + sl * U,
+            ],
+            axis=-1,
+        )
     lon, lat, h = inv.transform(d[..., 0] + X0, d[..., 1] + Y0, d[..., 2] + Z0)
     return np.asarray(lat, float), np.asarray(lon, float), np.asarray(h, float)
 

@@ -1171,24 +1171,52 @@ def _pos_cov(std: FloatArray) -> FloatArray:
     return c
 
 
-def _inv2(m: FloatArray) -> FloatArray:
-    """Inverses of a stack of 2x2 matrices ``(..., 2, 2)`` (adjugate / determinant)."""
-    det = m[..., 0, 0] * m[..., 1, 1] - m[..., 0, 1] * m[..., 1, 0]
-    out = np.empty_like(m)
-    out[..., 0, 0] = m[..., 1, 1] / det
-    out[..., 1, 1] = m[..., 0, 0] / det
-    out[..., 0, 1] = -m[..., 0, 1] / det
-    out[..., 1, 0] = -m[..., 1, 0] / det
-    return out
-
-
-def _report_cov(v: FloatArray, sigma_pos: FloatArray, sigma_time: FloatArray | float) -> FloatArray:
-    """``R = sigma_pos^2 I + sigma_time^2 v v^T`` per row, ``(N, 2, 2)``."""
-    st2 = np.broadcast_to(np.asarray(sigma_time, float) ** 2, sigma_pos.shape)
-    R = st2[:, None, None] * v[:, :, None] * v[:, None, :]
-    R[:, 0, 0] += sigma_pos**2
-    R[:, 1, 1] += sigma_pos**2
-    return R
+@njit(cache=True, error_model="numpy")
+def _offset_scores(r0, v, d_old, A, sp, st, st_fine, cand, loo, q):  # pragma: no cover
+    """``q[i, k] = r_d^T C^-1 r_d`` of :func:`timestamp_offsets` for every row ``i`` and
+    candidate offset ``cand[k]`` (2x2 algebra written out; NaN for a degenerate row)."""
+    for i in range(r0.shape[0]):
+        vx, vy = v[i, 0], v[i, 1]
+        s2 = sp[i] * sp[i]
+        ex = r0[i, 0]
+        ey = r0[i, 1]
+        c00 = s2 + st_fine * st_fine * vx * vx
+        c01 = st_fine * st_fine * vx * vy
+        c11 = s2 + st_fine * st_fine * vy * vy
+        if loo:
+            # R of the run, its inverse; X = I - A R^-1; B = X^-1; e = B r; M = B A
+            t2 = st[i] * st[i]
+            r00 = s2 + t2 * vx * vx
+            r01 = t2 * vx * vy
+            r11 = s2 + t2 * vy * vy
+            dr = r00 * r11 - r01 * r01
+            i00, i01, i11 = r11 / dr, -r01 / dr, r00 / dr
+            a00, a01, a10, a11 = A[i, 0, 0], A[i, 0, 1], A[i, 1, 0], A[i, 1, 1]
+            x00 = 1.0 - (a00 * i00 + a01 * i01)
+            x01 = -(a00 * i01 + a01 * i11)
+            x10 = -(a10 * i00 + a11 * i01)
+            x11 = 1.0 - (a10 * i01 + a11 * i11)
+            dx = x00 * x11 - x01 * x10
+            b00, b01, b10, b11 = x11 / dx, -x01 / dx, -x10 / dx, x00 / dx
+            rx = ex + vx * d_old[i]
+            ry = ey + vy * d_old[i]
+            ex = b00 * rx + b01 * ry - vx * d_old[i]
+            ey = b10 * rx + b11 * ry - vy * d_old[i]
+            m00 = b00 * a00 + b01 * a10
+            m01 = 0.5 * ((b00 * a01 + b01 * a11) + (b10 * a00 + b11 * a10))
+            m11 = b10 * a01 + b11 * a11
+            c00 += m00
+            c01 += m01
+            c11 += m11
+        dc = c00 * c11 - c01 * c01
+        j00, j01, j11 = c11 / dc, -c01 / dc, c00 / dc
+        # (e + v d)^T C^-1 (e + v d) = a + 2 b d + c d^2
+        qa = j00 * ex * ex + 2.0 * j01 * ex * ey + j11 * ey * ey
+        qb = j00 * ex * vx + j01 * (ex * vy + ey * vx) + j11 * ey * vy
+        qc = j00 * vx * vx + 2.0 * j01 * vx * vy + j11 * vy * vy
+        for k in range(cand.shape[0]):
+            d = cand[k]
+            q[i, k] = qa + 2.0 * qb * d + qc * d * d
 
 
 def timestamp_offsets(
@@ -1257,17 +1285,10 @@ def timestamp_offsets(
     sp = sig[ok, 0]
     d_old = used_offset[ok]
     r0 = xy[ok] - state[ok, :2]  # residual of d = 0: r_d = r0 + v d
-    C = _report_cov(v, sp, config.sigma_time_fine_s)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        if leave_one_out:
-            # residual against the track of the other reports: e = B r, B = (I - A R^-1)^-1
-            r = r0 + v * d_old[:, None]
-            B = _inv2(np.eye(2) - pos_cov[ok] @ _inv2(_report_cov(v, sp, sig[ok, 1])))
-            r0 = np.einsum("nij,nj->ni", B, r) - v * d_old[:, None]
-            M = B @ pos_cov[ok]
-            C = C + 0.5 * (M + np.swapaxes(M, 1, 2))
-        rd = r0[:, None, :] + v[:, None, :] * cand[None, :, None]
-        q = np.einsum("nki,nij,nkj->nk", rd, _inv2(C), rd)
+    q = np.empty((v.shape[0], cand.size))
+    _offset_scores(
+        r0, v, d_old, pos_cov[ok], sp, sig[ok, 1], config.sigma_time_fine_s, cand, leave_one_out, q
+    )
     q = np.where(np.isfinite(q), q, np.where(cand == 0, 0.0, np.inf))  # degenerate: d = 0
     speed2 = (v**2).sum(axis=1)
     sp2 = sp**2

@@ -1088,14 +1088,15 @@ def _refine_pass(
     kernel outputs of the passes before, whose outlier decisions are kept).
 
     1. Offsets of the accepted reports from the track ``out`` (:func:`timestamp_offsets`,
-       smoothed residuals: a first estimate, and the test whether the file shows offsets).
+       smoothed residuals): a first estimate that seeds step 3.
     2. Report noise re-estimated from the accepted reports only (:func:`position_noise`;
        the first estimate also saw the outliers); for vessels with offsets on the corrected
        times, with the timestamp-sigma floor ``sigma_time_fine_s``.
     3. All vessels filtered with the steady acceleration PSD ``q_accel_steady`` and the
        offsets in the measurement model; the offsets estimated again from that track
-       (leave-one-out residuals; the steady track follows single glitches less), up to
-       ``offset_passes`` times, re-filtering the vessels whose offsets changed.
+       (leave-one-out residuals; the steady track follows single glitches less) -- this
+       estimate decides whether the file shows offsets at all -- up to ``offset_passes``
+       times, re-filtering the vessels whose offsets changed (noise re-estimated).
     4. All vessels filtered with ``q_accel`` and the same offsets; per vessel, the track
        (``q_accel`` or ``q_accel_steady``) whose reports have the larger prediction
        log-likelihood is kept (a two-model choice per vessel: steady ships vs manoeuvring

@@ -11,7 +11,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from seatrack.report.html import VesselTrack, geojson, html_page, vessel_tracks, write_html
+from seatrack.report.html import (
+    VesselTrack,
+    geojson,
+    html_page,
+    map_tracks,
+    vessel_tracks,
+    write_html,
+)
 
 DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "ais"
 CHROMIUM_FLAGS = [
@@ -91,17 +98,7 @@ def test_page_draws_every_vessel_in_headless_chromium(tmp_path: Path) -> None:
     src = DATA / "dk_northsea_20221101_1h_selected.csv"
     assert src.is_file(), f"real AIS test data missing: {src.resolve()}"
     reports, tracks = track_files([src])
-    vt = vessel_tracks(
-        reports.mmsi,
-        reports.t,
-        reports.lat,
-        reports.lon,
-        tracks.lat,
-        tracks.lon,
-        tracks.segment,
-        tracks.outlier,
-        reports.valid,
-    )
+    vt = map_tracks(reports, tracks)
     page = tmp_path / "map.html"
     write_html(page, vt, title="selected")
     exe = _chromium()

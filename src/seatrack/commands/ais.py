@@ -172,19 +172,9 @@ def register(app: typer.Typer) -> None:
             typer.echo(ln)
         typer.echo(f"wrote {out} ({n} rows)")
         if geojson is not None or html is not None:
-            from seatrack.report.html import vessel_tracks, write_geojson, write_html
+            from seatrack.report.html import map_tracks, write_geojson, write_html
 
-            vt = vessel_tracks(
-                reports.mmsi,
-                reports.t,
-                reports.lat,
-                reports.lon,
-                tracks.lat,
-                tracks.lon,
-                tracks.segment,
-                tracks.outlier,
-                reports.valid,
-            )
+            vt = map_tracks(reports, tracks)
             if geojson is not None:
                 write_geojson(geojson, vt)
                 typer.echo(f"wrote {geojson}")

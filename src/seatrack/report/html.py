@@ -27,7 +27,15 @@ from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["VesselTrack", "vessel_tracks", "geojson", "write_geojson", "html_page", "write_html"]
+__all__ = [
+    "VesselTrack",
+    "vessel_tracks",
+    "map_tracks",
+    "geojson",
+    "write_geojson",
+    "html_page",
+    "write_html",
+]
 
 
 @dataclass(frozen=True)
@@ -46,6 +54,22 @@ class VesselTrack:
     lon: FloatArray
     segment: NDArray[np.int64]
     outlier: NDArray[np.bool_]
+
+
+def map_tracks(reports: Any, tracks: Any) -> list[VesselTrack]:
+    """:func:`vessel_tracks` of :class:`~seatrack.io.ais.AisReports` and their
+    :class:`~seatrack.filters.ais_tracker.AisTracks` (raw and smoothed positions)."""
+    return vessel_tracks(
+        reports.mmsi,
+        reports.t,
+        reports.lat,
+        reports.lon,
+        tracks.lat,
+        tracks.lon,
+        tracks.segment,
+        tracks.outlier,
+        reports.valid,
+    )
 
 
 def vessel_tracks(

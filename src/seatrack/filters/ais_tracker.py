@@ -214,8 +214,8 @@ class AisTrackerConfig:
         Re-estimations of the offsets from the steady track.
     refine : bool
         Run the refinement pass (:func:`_refine_pass`: timestamp offsets, noise without the
-        outliers, steady or manoeuvring process noise per vessel); False is about twice as
-        fast.
+        outliers, steady or manoeuvring process noise per vessel); False is 1.7 times
+        faster (benchmarks/ais.py, 1 M synthetic reports).
     steady_nis_ratio : float
         The ``q_accel`` track is tried only for vessels whose mean NIS on the steady track
         exceeds this ratio times its 2 dof [reading: on the real files every vessel whose

@@ -478,6 +478,44 @@ def test_course_is_referred_to_true_north_far_from_the_frame_origin(tmp_path: Pa
     assert np.abs(plane[far] - 90.0).min() > 1.5
 
 
+def test_compiled_two_d_update_equals_the_kalman_core() -> None:
+    """The tracker's 2-D Joseph update (position with offset, SOG/COG rows) equals
+    seatrack.kalman.update_core on random states, covariances and measurement matrices."""
+    from seatrack.filters.ais_tracker import _update2
+    from seatrack.kalman import update_core
+
+    rng = np.random.default_rng(8)
+    for trial in range(200):
+        a = rng.normal(size=(5, 5))
+        P = a @ a.T + 0.1 * np.eye(5)
+        x = rng.normal(size=5)
+        if trial % 2:
+            d = float(rng.integers(-2, 3))
+            H = np.zeros((2, 5))
+            H[0, 0] = H[1, 1] = 1.0
+            H[0, 2] = H[1, 3] = -d
+        else:
+            H = np.zeros((2, 5))
+            H[:, 2:4] = rng.normal(size=(2, 2))
+        b = rng.normal(size=(2, 2))
+        R = b @ b.T + 0.05 * np.eye(2)
+        y = rng.normal(size=2)
+        xo, Po, K = np.empty(5), np.empty((5, 5)), np.empty((5, 2))
+        nis = _update2(x, P, y, H, R, xo, Po, K)
+        xr, Pr, Sr, Kr = np.empty(5), np.empty((5, 5)), np.empty((2, 2)), np.empty((5, 2))
+        nis_r, _ = update_core(x, P, y, H, R, xr, Pr, Sr, Kr)
+        np.testing.assert_allclose(xo, xr, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(Po, Pr, rtol=1e-9, atol=1e-12)
+        np.testing.assert_allclose(K, Kr, rtol=1e-9, atol=1e-12)
+        assert nis == pytest.approx(nis_r, rel=1e-9)
+        assert np.array_equal(Po, Po.T)
+    # a measurement matrix that makes S singular leaves the state alone (inf NIS)
+    H = np.zeros((2, 5))
+    xo, Po, K = np.empty(5), np.empty((5, 5)), np.empty((5, 2))
+    assert _update2(x, P, y, H, np.zeros((2, 2)), xo, Po, K) == np.inf
+    assert np.array_equal(xo, x) and np.array_equal(Po, P)
+
+
 # ---------------------------------------------------------------------------
 # whole-second timestamp offsets and the refinement pass
 # ---------------------------------------------------------------------------

@@ -81,6 +81,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -108,6 +109,20 @@ __all__ = [
 
 NX = 5  # [x, y, vx, vy, w]
 _CHI2_1_MEDIAN = float(chi2.ppf(0.5, 1))  # 0.4549
+
+
+@lru_cache(maxsize=64)
+def _chi2_ppf(p: float, dof: int) -> float:
+    """Chi-square quantile (cached: SciPy's costs ~0.3 ms a call)."""
+    return float(chi2.ppf(p, dof))
+
+
+@lru_cache(maxsize=64)
+def _trim_scale(keep: float) -> float:
+    """``E[X | X <= chi2_1(keep)]`` for ``X ~ chi2_1``: ``F_3(chi2_1(keep)) / keep``."""
+    return float(chi2.cdf(chi2.ppf(keep, 1), 3) / keep) if keep < 1.0 else 1.0
+
+
 #: fewest reports with an identifiable offset (speed x 1 s > 3 sigma_pos) for the prior
 _MIN_OFFSET_REPORTS = 100
 _LOG_2PI = math.log(2.0 * math.pi)  # 2-D Gaussian: -0.5 (d2 + log det S) - log(2 pi)
@@ -290,7 +305,7 @@ class AisTrackerConfig:
     @property
     def gate(self) -> float:
         """Chi-square (2 dof) threshold of the gate."""
-        return float(chi2.ppf(self.gate_probability, 2))
+        return _chi2_ppf(self.gate_probability, 2)
 
 
 # ---------------------------------------------------------------------------
@@ -345,6 +360,61 @@ def _ct_Q(dt, q, q_w, Q):  # pragma: no cover - compiled
     Q[0, 2] = Q[2, 0] = Q[1, 3] = Q[3, 1] = q * dt**2 / 2
     Q[2, 2] = Q[3, 3] = q * dt
     Q[4, 4] = q_w * dt
+
+
+@njit(cache=True)
+def _update2(x, P, y, H, R, xo, Po, K):  # pragma: no cover - compiled
+    """Joseph-form update of the 5-state with a 2-D measurement (``H`` 2x5, innovation
+    ``y``, noise ``R``): the same update as :func:`seatrack.kalman.update_core` (tested
+    equal), ordered for this size -- ``(I - K H) P = P - K (H P)`` and
+    ``(I - K H) P (I - K H)^T = A - (A H^T) K^T`` with ``A = (I - K H) P`` -- about 300
+    multiply-adds instead of 480. Returns the NIS (inf if ``S`` is not positive definite,
+    the state and covariance then unchanged)."""
+    n = NX
+    hp = np.empty((2, n))  # H P
+    for r in range(2):
+        for j in range(n):
+            acc = 0.0
+            for k in range(n):
+                acc += H[r, k] * P[k, j]
+            hp[r, j] = acc
+    s00 = R[0, 0]
+    s01 = 0.5 * (R[0, 1] + R[1, 0])
+    s11 = R[1, 1]
+    for k in range(n):
+        s00 += hp[0, k] * H[0, k]
+        s01 += 0.5 * (hp[0, k] * H[1, k] + hp[1, k] * H[0, k])
+        s11 += hp[1, k] * H[1, k]
+    det = s00 * s11 - s01 * s01
+    if not (s00 > 0.0 and det > 0.0):
+        for j in range(n):
+            xo[j] = x[j]
+            for jj in range(n):
+                Po[j, jj] = P[j, jj]
+        return np.inf
+    i00, i01, i11 = s11 / det, -s01 / det, s00 / det
+    for j in range(n):  # K = P H^T S^-1 = (H P)^T S^-1
+        K[j, 0] = hp[0, j] * i00 + hp[1, j] * i01
+        K[j, 1] = hp[0, j] * i01 + hp[1, j] * i11
+        xo[j] = x[j] + K[j, 0] * y[0] + K[j, 1] * y[1]
+    nis = y[0] * (i00 * y[0] + i01 * y[1]) + y[1] * (i01 * y[0] + i11 * y[1])
+    ap = np.empty((n, n))  # (I - K H) P
+    for i in range(n):
+        for j in range(n):
+            ap[i, j] = P[i, j] - K[i, 0] * hp[0, j] - K[i, 1] * hp[1, j]
+    for i in range(n):
+        a0 = 0.0  # ((I - K H) P H^T)[i]
+        a1 = 0.0
+        for k in range(n):
+            a0 += ap[i, k] * H[0, k]
+            a1 += ap[i, k] * H[1, k]
+        kr0 = K[i, 0] * R[0, 0] + K[i, 1] * R[1, 0]  # (K R)[i]
+        kr1 = K[i, 0] * R[0, 1] + K[i, 1] * R[1, 1]
+        for j in range(i, n):
+            v = ap[i, j] - (a0 - kr0) * K[j, 0] - (a1 - kr1) * K[j, 1]
+            Po[i, j] = v
+            Po[j, i] = v
+    return nis
 
 
 @njit(cache=True)
@@ -630,13 +700,12 @@ def _track_kernel(
     fx = np.empty(NX)
     F = np.empty((NX, NX))
     Q = np.empty((NX, NX))
-    H = np.zeros((2, NX))
+    H = np.zeros((2, NX))  # position rows; columns 2, 3 carry the offset
     H[0, 0] = 1.0
     H[1, 1] = 1.0
     R = np.zeros((2, 2))
     R[0, 0] = R[1, 1] = sigma_pos * sigma_pos
     y = np.empty(2)
-    So = np.empty((2, 2))
     Ko = np.empty((NX, 2))
     xo = np.empty(NX)
     Po = np.empty((NX, NX))
@@ -648,7 +717,6 @@ def _track_kernel(
     R2[0, 0] = sigma_sog * sigma_sog
     R2[1, 1] = sigma_cog * sigma_cog
     y2 = np.empty(2)
-    S2 = np.empty((2, 2))
     K2 = np.empty((NX, 2))
     H1 = np.zeros((1, NX))
     R1 = np.zeros((1, 1))
@@ -792,7 +860,6 @@ def _track_kernel(
             # a report stamped toff seconds late shows the position at t - toff:
             # h(x) = [x - vx toff, y - vy toff] (H linear; toff = 0 unless estimated)
             dl = toff[i]
-            H[0, 2] = H[1, 3] = -dl
             y[0] = z[i, 0] - (fx[0] - dl * fx[2])
             y[1] = z[i, 1] - (fx[1] - dl * fx[3])
             s00 = Po[0, 0] - 2.0 * dl * Po[0, 2] + dl * dl * Po[2, 2] + R[0, 0]
@@ -870,7 +937,8 @@ def _track_kernel(
                 for j in range(NX):
                     for jj in range(NX):
                         Pi[j, jj] = Po[j, jj]
-            update_core(fx, Pi, y, H, R, xo, Po, So, Ko)
+            H[0, 2] = H[1, 3] = -dl
+            _update2(fx, Pi, y, H, R, xo, Po, Ko)
             if use_vel and sog[i] == sog[i] and sog[i] > vmin:
                 # velocity measurements: SOG (and COG), sequential update after the position
                 _sogcog(xo, h2, H2)
@@ -879,7 +947,7 @@ def _track_kernel(
                     if cog[i] == cog[i]:
                         y2[0] = sog[i] - h2[0]
                         y2[1] = wrap_angle(cog[i] - h2[1])
-                        nis2, _ = update_core(xo, Po, y2, H2, R2, xv, Pv, S2, K2)
+                        nis2 = _update2(xo, Po, y2, H2, R2, xv, Pv, K2)
                     elif use_sog_alone:
                         y1[0] = sog[i] - h2[0]
                         for j in range(NX):
@@ -1502,8 +1570,7 @@ def _group_trimmed_mean(
     rank = np.arange(xs.size) - first[gs]
     kept = rank < n_keep[gs]
     tot = np.bincount(gs[kept], weights=xs[kept], minlength=n_groups)
-    a = chi2.ppf(keep, 1)
-    scale = chi2.cdf(a, 3) / keep if keep < 1.0 else 1.0
+    scale = _trim_scale(keep)
     out = np.full(n_groups, np.nan)
     has = count > 0
     out[has] = tot[has] / n_keep[has] / scale

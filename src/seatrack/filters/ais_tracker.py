@@ -229,7 +229,7 @@ class AisTrackerConfig:
         Re-estimations of the offsets from the steady track.
     refine : bool
         Run the refinement pass (:func:`_refine_pass`: timestamp offsets, noise without the
-        outliers, steady or manoeuvring process noise per vessel); False is 1.7 times
+        outliers, steady or manoeuvring process noise per vessel); False is 1.35 times
         faster (benchmarks/ais.py, 1 M synthetic reports).
     steady_nis_ratio : float
         The ``q_accel`` track is tried only for vessels whose mean NIS on the steady track

@@ -54,6 +54,8 @@ def test_ais_command_writes_every_row(tmp_path: Path) -> None:
     offs = [float(r["time_offset_s"]) for r in rows if r["time_offset_s"]]
     assert set(offs) <= {-2.0, -1.0, 0.0, 1.0, 2.0}
     assert 0.05 < sum(o != 0 for o in offs) / len(offs) < 0.3
+    n_off = sum(o != 0 for o in offs)
+    assert f"reports with a whole-second timestamp offset: {n_off} (" in res.output
     assert f"rows read: {n_in}" in res.output
     assert "duplicate report: 407" in res.output
     # vessels contiguous in order of first appearance; input order (file, line) within each

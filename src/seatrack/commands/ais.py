@@ -99,7 +99,8 @@ def track_columns(tracks: Any) -> dict[str, np.ndarray]:
 
 
 def summary_lines(reports: Any, tracks: Any) -> list[str]:
-    """Rows read / used / rejected by reason, outliers, vessels, segments."""
+    """Rows read / used / rejected by reason, outliers, vessels, segments, reports with a
+    timestamp offset."""
     from seatrack.io.ais import rejection_counts
 
     n = len(reports)
@@ -119,6 +120,12 @@ def summary_lines(reports: Any, tracks: Any) -> list[str]:
         lines.append(f"lines that are not position reports: {sum(reports.skipped.values())}")
         lines += [f"  {k}: {v}" for k, v in sorted(reports.skipped.items())]
     lines.append(f"vessels: {vessels}, track segments: {segs}")
+    off = np.asarray(tracks.time_offset_s, float)
+    n_off = int(np.count_nonzero(np.isfinite(off) & (off != 0)))
+    if used:
+        lines.append(
+            f"reports with a whole-second timestamp offset: {n_off} ({100 * n_off / used:.1f} %)"
+        )
     return lines
 
 

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from seatrack.evaluate.holdout import ais_holdout
 from seatrack.filters.ais_tracker import (
     AisTrackerConfig,
     ct_step,
@@ -303,29 +304,8 @@ def test_real_flagged_reports_are_implausible(name: str) -> None:
 def _holdout(
     r: AisReports, cfg: AisTrackerConfig = CFG
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    o = _sorted_valid(r)
-    m = r.mmsi[o]
-    start = np.maximum.accumulate(np.where(np.r_[True, m[1:] != m[:-1]], np.arange(o.size), 0))
-    held = (np.arange(o.size) - start) % 5 == 4
-    use = np.ones(len(r), dtype=bool)
-    use[o[held]] = False
-    tr = track_reports(r, cfg, use=use)
-    E = to_local(r).enu[:, :2]
-    pos = np.arange(o.size)
-    prev = np.maximum.accumulate(np.where(~held, pos, -1))
-    nxt = np.minimum.accumulate(np.where(~held, pos, o.size)[::-1])[::-1]
-    ii = np.flatnonzero(held & (prev >= 0) & (nxt < o.size))
-    ii = ii[(m[prev[ii]] == m[ii]) & (m[nxt[ii]] == m[ii])]  # neighbours on both sides
-    rows, rp, rn = o[ii], o[prev[ii]], o[nxt[ii]]
-    span = r.t[rn] - r.t[rp]
-    w = np.where(span > 0, (r.t[rows] - r.t[rp]) / np.where(span > 0, span, 1.0), 0.5)
-    lerp = E[rp] + w[:, None] * (E[rn] - E[rp])
-    e_lin = np.hypot(*(lerp - E[rows]).T)
-    e_trk = np.hypot(tr.x_m[rows] - E[rows, 0], tr.y_m[rows] - E[rows, 1])
-    # a withheld report that starts a new track segment (after a long gap) has no track
-    # estimate: it is excluded from both methods (counted)
-    has = np.isfinite(e_trk)
-    return e_trk[has], e_lin[has], rows[has]
+    res = ais_holdout(r, cfg)  # every 5th report of each vessel withheld
+    return res.track, res.interp, res.row
 
 
 def test_real_holdout_beats_linear_interpolation() -> None:

@@ -19,21 +19,13 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 import numpy as np
 
+from ais import DATA  # the real files, as in benchmarks/ais.py
+from ais import REAL as FILES
 from seatrack.evaluate.holdout import ais_holdout
 from seatrack.io.ais import read_ais_csv, to_local
-
-DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "ais"
-FILES = [
-    "no_vestland_20220901.csv",
-    "dk_northsea_20221101_1h_selected.csv",
-    "dk_northsea_20221101_1h_all.csv",
-    "dk_gothenburg_20170705_cpa.csv",
-    "us_boston_201401_trajectools.csv",
-]
 
 
 def time_residuals(r) -> np.ndarray:  # type: ignore[no-untyped-def]

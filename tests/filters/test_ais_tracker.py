@@ -458,6 +458,23 @@ def test_course_is_referred_to_true_north_far_from_the_frame_origin(tmp_path: Pa
     assert np.abs(plane[far] - 90.0).min() > 1.5
 
 
+@pytest.mark.parametrize(
+    "bad",
+    [
+        {"sigma_time_fine_s": 0.0},
+        {"steady_nis_ratio": -1.0},
+        {"max_turn_rate_dps": 0.0},
+        {"max_time_offset_s": -1},
+        {"offset_passes": -1},
+        {"q_accel_steady": -0.1},
+        {"min_offset_share": 1.0},
+    ],
+)
+def test_refinement_settings_are_checked(bad: dict) -> None:
+    with pytest.raises(ValueError, match=next(iter(bad))):
+        AisTrackerConfig(**bad)
+
+
 def test_compiled_two_d_update_equals_the_kalman_core() -> None:
     """The tracker's 2-D Joseph update (position with offset, SOG/COG rows) equals
     seatrack.kalman.update_core on random states, covariances and measurement matrices."""

@@ -301,6 +301,14 @@ class AisTrackerConfig:
             )
         if not 0.0 < self.noise_trim <= 1.0:
             raise ValueError(f"noise_trim must be in (0, 1], got {self.noise_trim}")
+        for name in ("sigma_time_fine_s", "steady_nis_ratio", "max_turn_rate_dps"):
+            if not getattr(self, name) > 0:
+                raise ValueError(f"AisTrackerConfig.{name} must be > 0, got {getattr(self, name)}")
+        for name in ("max_time_offset_s", "offset_passes", "q_accel_steady"):
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"AisTrackerConfig.{name} must be >= 0, got {getattr(self, name)}")
+        if not 0.0 <= self.min_offset_share < 1.0:
+            raise ValueError(f"min_offset_share must be in [0, 1), got {self.min_offset_share}")
 
     @property
     def gate(self) -> float:

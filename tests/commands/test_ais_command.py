@@ -10,15 +10,8 @@ from pathlib import Path
 
 from typer.testing import CliRunner
 
+from ais_samples import data_file
 from seatrack.cli import app
-
-DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "ais"
-
-
-def data_file(name: str) -> Path:
-    p = DATA / name
-    assert p.is_file(), f"real AIS test data missing: {p.resolve()}"
-    return p
 
 
 def test_ais_command_writes_every_row(tmp_path: Path) -> None:

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from ais_samples import FILES, data_file
 from seatrack.evaluate.holdout import ais_holdout
 from seatrack.filters.ais_tracker import (
     AisTrackerConfig,
@@ -26,24 +27,7 @@ from seatrack.models import numerical_jacobian
 from seatrack.models.motion import ct_jacobian, ct_noise, ct_transition
 from seatrack.simulate import Leg, trajectory
 
-DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "ais"
-FILES = [
-    "no_vestland_20220901.csv",
-    "dk_northsea_20221101_1h_selected.csv",
-    "dk_northsea_20221101_1h_all.csv",
-    "dk_gothenburg_20170705_cpa.csv",
-    "us_boston_201401_trajectools.csv",
-]
 CFG = AisTrackerConfig()
-
-
-def data_file(name: str) -> Path:
-    p = DATA / name
-    assert p.is_file(), (
-        f"real AIS test data missing: {p.resolve()} (expected the shared/ folder beside the "
-        "repository, as in CI)"
-    )
-    return p
 
 
 _CACHE: dict[str, tuple[AisReports, object]] = {}

@@ -3,6 +3,7 @@ from dataclasses import replace
 import numpy as np
 
 from seatrack.filters.ekf import run_ekf, track_plots
+from seatrack.filters.registry import COMMON_COLUMNS
 from seatrack.io.measurements_csv import plots_from_measurements
 from seatrack.simulate import Leg, NoiseModel, observe, trajectory
 
@@ -54,15 +55,7 @@ def test_track_plots_columns_and_2d():
     pt = _plots(m, with_el=False, with_rr=False)
     cols = track_plots(pt, {"sigma_range_m": 5.0, "sigma_azimuth_deg": 1.0, "q": 1e-3})
     for c in (
-        "x_m",
-        "y_m",
-        "z_m",
-        "vx_mps",
-        "vy_mps",
-        "vz_mps",
-        "std_x_m",
-        "std_y_m",
-        "std_z_m",
+        *COMMON_COLUMNS,
         "nis",
     ):
         assert cols[c].shape == (len(pt),)

@@ -10,7 +10,7 @@ import pytest
 
 from seatrack import kalman
 from seatrack.filters import turning as T
-from seatrack.filters.registry import get_method
+from seatrack.filters.registry import COMMON_COLUMNS, get_method
 from seatrack.geometry import spherical_to_cart, wrap_pi
 from seatrack.io.plots import PlotTrack
 from seatrack.models import numerical_jacobian
@@ -375,15 +375,7 @@ def test_track_plots_columns(d):
     out = run(plots, cfg)
     n = len(plots)
     for c in (
-        "x_m",
-        "y_m",
-        "z_m",
-        "vx_mps",
-        "vy_mps",
-        "vz_mps",
-        "std_x_m",
-        "std_y_m",
-        "std_z_m",
+        *COMMON_COLUMNS,
         "speed_mps",
         "heading_deg",
         "turn_rate_dps",

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from ais_samples import FILES, data_file
 from seatrack.io.ais import (
     REJECT_REASONS,
     detect_schema,
@@ -21,24 +22,6 @@ from seatrack.io.ais import (
     write_tracks_csv,
 )
 from seatrack.io.table import InputError
-
-DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "ais"
-FILES = [
-    "no_vestland_20220901.csv",
-    "dk_northsea_20221101_1h_selected.csv",
-    "dk_northsea_20221101_1h_all.csv",
-    "dk_gothenburg_20170705_cpa.csv",
-    "us_boston_201401_trajectools.csv",
-]
-
-
-def data_file(name: str) -> Path:
-    p = DATA / name
-    assert p.is_file(), (
-        f"real AIS test data missing: {p.resolve()} (expected the shared/ folder beside the "
-        "repository, as in CI)"
-    )
-    return p
 
 
 def _raw_rows(path: Path) -> list[dict[str, str]]:

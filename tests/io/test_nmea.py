@@ -8,16 +8,9 @@ import numpy as np
 from pyais.encode import encode_dict
 from pyais.util import compute_checksum
 
+from ais_samples import data_file
 from seatrack.io.ais import format_times, read_ais, read_ais_csv
 from seatrack.io.nmea import looks_like_nmea, nmea_checksum, read_nmea
-
-DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "ais"
-
-
-def data_file(name: str) -> Path:
-    p = DATA / name
-    assert p.is_file(), f"real AIS test data missing: {p.resolve()}"
-    return p
 
 
 def _tag(t: float) -> str:

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from ais_samples import data_file
 from seatrack.report.html import (
     VesselTrack,
     geojson,
@@ -20,7 +21,6 @@ from seatrack.report.html import (
     write_html,
 )
 
-DATA = Path(__file__).resolve().parents[2] / ".." / "shared" / "data" / "ais"
 CHROMIUM_FLAGS = [
     "--headless",
     "--no-sandbox",
@@ -95,8 +95,7 @@ def _chromium() -> str:
 def test_page_draws_every_vessel_in_headless_chromium(tmp_path: Path) -> None:
     from seatrack.commands.ais import track_files
 
-    src = DATA / "dk_northsea_20221101_1h_selected.csv"
-    assert src.is_file(), f"real AIS test data missing: {src.resolve()}"
+    src = data_file("dk_northsea_20221101_1h_selected.csv")
     reports, tracks = track_files([src])
     vt = map_tracks(reports, tracks)
     page = tmp_path / "map.html"

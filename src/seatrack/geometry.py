@@ -149,17 +149,20 @@ def _transformers() -> tuple[Any, Any]:
     return fwd, inv
 
 
-def _enu_rotation(lat0: ArrayLike, lon0: ArrayLike) -> FloatArray:
-    """Rotation ECEF -> local ENU at (lat0, lon0) (deg); rows East, North, Up in ECEF."""
-    sl, cl = np.sin(np.radians(lat0)), np.cos(np.radians(lat0))
-    so, co = np.sin(np.radians(lon0)), np.cos(np.radians(lon0))
-    return np.array(
-        [
-            [-so, co, 0.0],
-            [-sl * co, -sl * so, cl],
-            [cl * co, cl * so, sl],
-        ]
+def _origin(
+    lat0_deg: ArrayLike, lon0_deg: ArrayLike, h0_m: ArrayLike
+) -> tuple[FloatArray, FloatArray, FloatArray, tuple[FloatArray, ...]]:
+    """ECEF (X0, Y0, Z0) of the origin(s) and the sines/cosines ``(sin lat0, cos lat0,
+    sin lon0, cos lon0)`` of the ENU rotation, whose rows (East, North, Up unit vectors in
+    ECEF) are ``(-so, co, 0)``, ``(-sl co, -sl so, cl)``, ``(cl co, cl so, sl)``. One origin
+    or one per point: the arrays broadcast with the points."""
+    fwd, _ = _transformers()
+    la0, lo0, h0 = np.broadcast_arrays(
+        *(np.asarray(a, dtype=float) for a in (lat0_deg, lon0_deg, h0_m))
     )
+    X0, Y0, Z0 = (np.asarray(c, float) for c in fwd.transform(lo0, la0, h0))
+    p, lam = np.radians(la0), np.radians(lo0)
+    return X0, Y0, Z0, (np.sin(p), np.cos(p), np.sin(lam), np.cos(lam))
 
 
 def geodetic_to_enu(
@@ -177,19 +180,12 @@ def geodetic_to_enu(
     per point (arrays broadcasting with the points). Returns ``(..., 3)``.
     """
     fwd, _ = _transformers()
-    lat, lon, h, la0, lo0, h0 = np.broadcast_arrays(
-        *(np.asarray(a, dtype=float) for a in (lat_deg, lon_deg, h_m, lat0_deg, lon0_deg, h0_m))
+    lat, lon, h = np.broadcast_arrays(
+        *(np.asarray(a, dtype=float) for a in (lat_deg, lon_deg, h_m))
     )
     X, Y, Z = fwd.transform(lon, lat, h)
-    if np.ndim(lat0_deg) == 0 and np.ndim(lon0_deg) == 0 and np.ndim(h0_m) == 0:
-        X0, Y0, Z0 = fwd.transform(float(lon0_deg), float(lat0_deg), float(h0_m))  # type: ignore[arg-type]
-        d = np.stack([np.asarray(X) - X0, np.asarray(Y) - Y0, np.asarray(Z) - Z0], axis=-1)
-        return d @ _enu_rotation(lat0_deg, lon0_deg).T
-    X0, Y0, Z0 = fwd.transform(lo0, la0, h0)
+    X0, Y0, Z0, (sl, cl, so, co) = _origin(lat0_deg, lon0_deg, h0_m)
     dx, dy, dz = np.asarray(X) - X0, np.asarray(Y) - Y0, np.asarray(Z) - Z0
-    p, lam = np.radians(la0), np.radians(lo0)
-    sl, cl, so, co = np.sin(p), np.cos(p), np.sin(lam), np.cos(lam)
-    # rows of the ENU rotation (see _enu_rotation), applied element-wise
     east = -so * dx + co * dy
     north = -sl * co * dx - sl * so * dy + cl * dz
     up = cl * co * dx + cl * so * dy + sl * dz
@@ -204,31 +200,17 @@ def enu_to_geodetic(
     Inverse of :func:`geodetic_to_enu` (one origin, or one per point); returns degrees,
     degrees, metres.
     """
-    fwd, inv = _transformers()
+    _, inv = _transformers()
     e = np.asarray(enu, dtype=float)
     if e.shape[-1] == 2:
         e = np.concatenate([e, np.zeros(e.shape[:-1] + (1,))], axis=-1)
-    if np.ndim(lat0_deg) == 0 and np.ndim(lon0_deg) == 0 and np.ndim(h0_m) == 0:
-        X0, Y0, Z0 = fwd.transform(lon0_deg, lat0_deg, h0_m)
-        d = e @ _enu_rotation(lat0_deg, lon0_deg)
-    else:
-        la0, lo0, h0 = np.broadcast_arrays(
-            *(np.asarray(a, dtype=float) for a in (lat0_deg, lon0_deg, h0_m))
-        )
-        X0, Y0, Z0 = fwd.transform(lo0, la0, h0)
-        p, lam = np.radians(la0), np.radians(lo0)
-        sl, cl, so, co = np.sin(p), np.cos(p), np.sin(lam), np.cos(lam)
-        E, N, U = e[..., 0], e[..., 1], e[..., 2]
-        # the transposed rotation, element-wise
-        d = np.stack(
-            [
-                -so * E - sl * co * N + cl * co * U,
-                co * E - sl * so * N + cl * so * U,
-                cl * N + sl * U,
-            ],
-            axis=-1,
-        )
-    lon, lat, h = inv.transform(d[..., 0] + X0, d[..., 1] + Y0, d[..., 2] + Z0)
+    X0, Y0, Z0, (sl, cl, so, co) = _origin(lat0_deg, lon0_deg, h0_m)
+    E, N, U = e[..., 0], e[..., 1], e[..., 2]
+    # the transposed rotation
+    X = -so * E - sl * co * N + cl * co * U + X0
+    Y = co * E - sl * so * N + cl * so * U + Y0
+    Z = cl * N + sl * U + Z0
+    lon, lat, h = inv.transform(X, Y, Z)
     return np.asarray(lat, float), np.asarray(lon, float), np.asarray(h, float)
 
 

@@ -377,7 +377,9 @@ def _update2(x, P, y, H, R, xo, Po, K):  # pragma: no cover - compiled
     equal), ordered for this size -- ``(I - K H) P = P - K (H P)`` and
     ``(I - K H) P (I - K H)^T = A - (A H^T) K^T`` with ``A = (I - K H) P`` -- about 300
     multiply-adds instead of 480. Returns the NIS (inf if ``S`` is not positive definite,
-    the state and covariance then unchanged)."""
+    the state and covariance then unchanged). The general core given the same ordering
+    was measured no faster (0.26 s per 100k-report pass against 0.18 s here, and no change
+    for the 4-state filters): the gain comes from the sizes being known when compiling."""
     n = NX
     hp = np.empty((2, n))  # H P
     for r in range(2):
@@ -1242,7 +1244,6 @@ def _refine_pass(
         ll_alt = np.bincount(inv_v[fin], alt[5][fin], uv.size)
         take = cand & (ll > ll_alt)[inv_v]
         _put(alt, take, tuple(a[take] for a in hi))
-        off[take & ~moved] = 0.0
     return alt, off
 
 

@@ -229,8 +229,8 @@ class AisTrackerConfig:
         Re-estimations of the offsets from the steady track.
     refine : bool
         Run the refinement pass (:func:`_refine_pass`: timestamp offsets, noise without the
-        outliers, steady or manoeuvring process noise per vessel); False is 1.35 times
-        faster (benchmarks/ais.py, 1 M synthetic reports).
+        outliers, steady or manoeuvring process noise per vessel); False is 1.35-1.8
+        times faster (benchmarks/ais.py, 1 M synthetic reports, two runs).
     steady_nis_ratio : float
         The ``q_accel`` track is tried only for vessels whose mean NIS on the steady track
         exceeds this ratio times its 2 dof [reading: on the real files every vessel whose

@@ -1,9 +1,9 @@
 """AIS tracking throughput: reports per second, end to end (read, track, write) and for the
-tracking stage alone, on the real files in ../shared/data/ais and on a synthetic
+tracking stage alone, on the real files bundled in seatrack/data/ais and on a synthetic
 1,000,000-report file generated in a temporary directory.
 
-    /work/venv/bin/python benchmarks/ais.py            # full run (a few minutes)
-    /work/venv/bin/python benchmarks/ais.py --quick    # smoke run (100,000 synthetic reports)
+    python benchmarks/ais.py            # full run (a few minutes)
+    python benchmarks/ais.py --quick    # smoke run (100,000 synthetic reports)
 
 One core: numba runs the tracker single-threaded and BLAS threads are pinned to 1.
 The anchor is the same coordinated-turn EKF written as one Python loop per report over
@@ -30,17 +30,12 @@ from pathlib import Path  # noqa: E402
 import numpy as np  # noqa: E402
 
 from seatrack.commands.ais import track_columns  # noqa: E402
+from seatrack.data import AIS_SAMPLES, ais_sample  # noqa: E402
 from seatrack.filters.ais_tracker import AisTrackerConfig, track_reports, track_vessels  # noqa: E402
 from seatrack.io.ais import read_ais, to_local, write_tracks_csv  # noqa: E402
 
-DATA = Path(__file__).resolve().parents[1] / ".." / "shared" / "data" / "ais"
-REAL = [
-    "no_vestland_20220901.csv",
-    "dk_northsea_20221101_1h_selected.csv",
-    "dk_northsea_20221101_1h_all.csv",
-    "dk_gothenburg_20170705_cpa.csv",
-    "us_boston_201401_trajectools.csv",
-]
+DATA = ais_sample(AIS_SAMPLES[0]).parent  # the real files bundled in seatrack/data/ais
+REAL = list(AIS_SAMPLES)
 TARGET = 100_000.0
 
 

@@ -1,6 +1,6 @@
 """AIS hold-out accuracy on the real files, every fold: tracker vs linear interpolation.
 
-For each file of ../shared/data/ais and each phase 0..4, every 5th report of each vessel
+For each real file bundled in seatrack/data/ais and each phase 0..4, every 5th report of each vessel
 (the one at that position in each group of five) is withheld and predicted
 (:func:`seatrack.evaluate.holdout.ais_holdout`); the table gives the median and 95th
 percentile of the error (m) of the track and of linear interpolation between the neighbours,

@@ -17,7 +17,7 @@ The navigator is told the map accuracy (``map_sigma`` = 3 m).
   along the normal for contour elements). During a survey pass ``map_sigma`` is the prior
   30 m, then the RMS correction of the previous pass.
 
-Run: ``/work/venv/bin/python benchmarks/navigation.py [--quick] [--runs N]``.
+Run: ``python benchmarks/navigation.py [--quick] [--runs N]``.
 """
 
 from __future__ import annotations

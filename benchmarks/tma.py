@@ -1,6 +1,6 @@
 """Bearings-only TMA benchmark: accuracy vs FilterPy / Stone Soup EKFs, speed vs SciPy.
 
-Run: ``/work/venv/bin/python benchmarks/tma.py [--quick] [--runs N]``. Prints one table.
+Run: ``python benchmarks/tma.py [--quick] [--runs N]``. Prints one table.
 
 Accuracy -- the classic scenario of Ristic, Arulampalam & Gordon (ch. 6; see
 :func:`seatrack.tma.classic_scenario`), the same seeded bearings for every method; final

@@ -4,7 +4,7 @@ Two contacts seen from one own ship (the classic Ristic et al. ch. 6 geometry):
 contact ``A`` is the classic target; contact ``B`` is a second straight-running target.
 The support file gives a radar range on ``B`` at the last bearing time. Run::
 
-    /work/venv/bin/python examples/make_tma_example.py
+    python examples/make_tma_example.py
     seatrack tma examples/tma_bearings.csv --support examples/tma_support.csv \
         --out result.json --plot tma.png
 """

@@ -16,6 +16,7 @@ import sys
 
 import typer
 
+from seatrack.io.atomic import OutputError
 from seatrack.io.table import InputError
 
 #: sub-command modules, in the order ``--help`` lists them
@@ -62,7 +63,7 @@ def main() -> None:
     """Entry point of the ``seatrack`` console script."""
     try:
         app()
-    except (InputError, ValueError, FileNotFoundError) as exc:
+    except (InputError, OutputError, ValueError, FileNotFoundError) as exc:
         typer.echo(f"error: {exc}", err=True)
         sys.exit(2)
 

@@ -1,5 +1,5 @@
 """AIS tracker: compiled CT step, synthetic turning vessels with glitches, and the real data
-in ../shared/data/ais (every row accounted for, glitches flagged, flags implausible, hold-out
+bundled in seatrack/data/ais (every row accounted for, glitches flagged, flags implausible, hold-out
 prediction against linear interpolation)."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""AIS CSV readers on the real data in ../shared/data/ais (every row accounted for)."""
+"""AIS CSV readers on the real data bundled in seatrack/data/ais (every row accounted for)."""
 
 from __future__ import annotations
 

@@ -1,0 +1,130 @@
+"""Atomic output files: every file seatrack writes goes through this module.
+
+A file is written to a temporary file in the destination folder, flushed and fsynced, then
+moved over the destination with :func:`os.replace` (atomic on POSIX and Windows). On any
+failure -- an exception, a full disk, a size limit, an interrupt -- the temporary file is
+removed and the previous content of the destination, if any, is intact. A reader never sees
+a half-written file.
+
+* :func:`atomic_write` -- a context manager yielding an open file object (text or binary);
+* :func:`atomic_path` -- a context manager yielding a temporary *path*, for libraries that
+  write to a file name themselves (matplotlib, pyarrow);
+* :func:`check_output_path` -- the one check every command runs on an output path before
+  doing any work, so a bad path fails fast with :class:`OutputError` and nothing is computed
+  in vain.
+
+Output folders are created when missing (like ``mkdir -p``); a path that is a directory,
+or whose parent is a file, or a folder that is not writable is refused with a clear message.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+from typing import IO, Any
+
+__all__ = ["OutputError", "atomic_path", "atomic_write", "check_output_path"]
+
+
+class OutputError(OSError):
+    """An output file cannot be written; the message names the file and the reason."""
+
+
+def check_output_path(path: str | os.PathLike[str], *, create_parent: bool = True) -> Path:
+    """Validate an output path (and create its folder); return it as a :class:`Path`.
+
+    Raises
+    ------
+    OutputError
+        When the path is a directory, a parent is not a directory, or the folder is not
+        writable.
+    """
+    p = Path(path)
+    if str(path) == "" or p.name in ("", ".", ".."):
+        raise OutputError(f"{path}: not a file name")
+    if p.is_dir():
+        raise OutputError(f"{p}: is a directory, expected a file name")
+    parent = p.parent
+    for anc in [parent, *parent.parents]:
+        if anc.exists():
+            if not anc.is_dir():
+                raise OutputError(f"{p}: cannot create the output folder, {anc} is a file")
+            break
+    if create_parent:
+        try:
+            parent.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OutputError(f"{p}: cannot create the output folder ({exc.strerror})") from None
+    if parent.exists() and not os.access(parent, os.W_OK | os.X_OK):
+        raise OutputError(f"{p}: folder {parent} is not writable")
+    if p.exists() and not os.access(p, os.W_OK):
+        raise OutputError(f"{p}: file is not writable")
+    return p
+
+
+def _umask_mode() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; on success it replaces ``path`` atomically.
+
+    ``suffix`` (default: the suffix of ``path``) lets libraries that infer the format from
+    the file name (``savefig``) see the right one.
+    """
+    dest = check_output_path(path)
+    fd, tmp = tempfile.mkstemp(
+        dir=dest.parent, prefix=f".{dest.name}.", suffix=(dest.suffix if suffix is None else suffix)
+    )
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        yield tmp_path
+        with open(tmp_path, "rb+") as fh:  # data of the library's writer reach the disk
+            os.fsync(fh.fileno())
+        os.chmod(tmp_path, _umask_mode())
+        os.replace(tmp_path, dest)
+    except BaseException as exc:
+        with contextlib.suppress(OSError):
+            tmp_path.unlink()
+        if isinstance(exc, OSError) and not isinstance(exc, OutputError):
+            raise OutputError(f"{dest}: write failed ({exc.strerror or exc})") from None
+        raise
+
+
+@contextlib.contextmanager
+def atomic_write(
+    path: str | os.PathLike[str],
+    mode: str = "w",
+    *,
+    encoding: str | None = "utf-8",
+    newline: str | None = None,
+) -> Iterator[IO[Any]]:
+    """Open a temporary file for writing; on success it replaces ``path`` atomically.
+
+    Parameters
+    ----------
+    path : output file.
+    mode : ``"w"`` (text) or ``"wb"`` (binary).
+    encoding, newline : as for :func:`open` (text mode only; CSV writers want ``newline=""``).
+
+    Examples
+    --------
+    >>> with atomic_write(out, newline="") as fh:   # doctest: +SKIP
+    ...     csv.writer(fh).writerows(rows)
+    """
+    if mode not in ("w", "wb"):
+        raise ValueError(f"atomic_write mode must be 'w' or 'wb', got {mode!r}")
+    with atomic_path(path) as tmp:
+        if mode == "wb":
+            with open(tmp, "wb") as fh:
+                yield fh
+        else:
+            with open(tmp, "w", encoding=encoding, newline=newline) as fh:
+                yield fh

@@ -1,0 +1,92 @@
+"""Atomic outputs: a failed write keeps the previous file and leaves no temporary."""
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+from seatrack.io.atomic import OutputError, atomic_path, atomic_write, check_output_path
+
+
+def test_success_replaces_and_leaves_no_temporary(tmp_path):
+    out = tmp_path / "a.csv"
+    out.write_text("old\n")
+    with atomic_write(out, newline="") as fh:
+        fh.write("new\n")
+    assert out.read_text() == "new\n"
+    assert sorted(os.listdir(tmp_path)) == ["a.csv"]
+
+
+def test_exception_keeps_old_file(tmp_path):
+    out = tmp_path / "a.csv"
+    out.write_text("old\n")
+    with pytest.raises(RuntimeError):
+        with atomic_write(out) as fh:
+            fh.write("half")
+            raise RuntimeError("boom")
+    assert out.read_text() == "old\n"
+    assert sorted(os.listdir(tmp_path)) == ["a.csv"]
+
+
+def test_atomic_path_for_libraries(tmp_path):
+    out = tmp_path / "sub" / "b.bin"
+    with atomic_path(out) as tmp:
+        assert tmp.parent == out.parent and tmp.suffix == ".bin"
+        tmp.write_bytes(b"xyz")
+    assert out.read_bytes() == b"xyz"
+    assert sorted(os.listdir(out.parent)) == ["b.bin"]
+
+
+def test_new_file_gets_umask_permissions(tmp_path):
+    out = tmp_path / "p.txt"
+    with atomic_write(out) as fh:
+        fh.write("x")
+    mask = os.umask(0)
+    os.umask(mask)
+    assert out.stat().st_mode & 0o777 == 0o666 & ~mask
+
+
+@pytest.mark.parametrize("case", ["directory", "parent_is_file", "empty"])
+def test_bad_output_paths_are_refused(tmp_path, case):
+    if case == "directory":
+        path = tmp_path
+    elif case == "parent_is_file":
+        (tmp_path / "f").write_text("x")
+        path = tmp_path / "f" / "out.csv"
+    else:
+        path = ""
+    with pytest.raises(OutputError):
+        check_output_path(path)
+
+
+@pytest.mark.skipif(os.geteuid() == 0, reason="root can write into read-only folders")
+def test_unwritable_folder_is_refused(tmp_path):
+    d = tmp_path / "ro"
+    d.mkdir()
+    d.chmod(0o500)
+    try:
+        with pytest.raises(OutputError, match="not writable"):
+            check_output_path(d / "x.csv")
+    finally:
+        d.chmod(0o700)
+
+
+def test_write_cut_by_file_size_limit_keeps_old_file(tmp_path):
+    """A write that fails part-way (RLIMIT_FSIZE in a child process) keeps the old file."""
+    out = tmp_path / "big.csv"
+    out.write_text("previous good output\n")
+    code = f"""
+import resource, signal
+signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+resource.setrlimit(resource.RLIMIT_FSIZE, (4096, 4096))
+from seatrack.io.atomic import atomic_write
+with atomic_write({str(out)!r}) as fh:
+    for i in range(100000):
+        fh.write("%d,%d,%d\\n" % (i, i, i))
+"""
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert r.returncode != 0
+    assert "OutputError" in r.stderr or "File too large" in r.stderr
+    assert out.read_text() == "previous good output\n"
+    assert sorted(os.listdir(tmp_path)) == ["big.csv"]

@@ -2,7 +2,8 @@
 
 Three CSV schemas are recognised by their header (extra columns are ignored):
 
-* **common** (the schema of the bundled samples in ``seatrack/data/ais``): ``mmsi, time_utc, lat, lon`` and optional
+* **common** (the schema of the bundled samples, ``seatrack/data/ais``): ``mmsi, time_utc,
+  lat, lon`` and optional
   ``sog_kn, cog_deg, heading_deg``; ``time_utc`` ISO 8601 (``2022-09-01T20:27:05Z``).
 * **DMA** (Danish Maritime Authority ``aisdk`` exports): ``# Timestamp, MMSI, Latitude,
   Longitude`` and optional ``SOG, COG, Heading``; timestamps ``dd/mm/yyyy HH:MM:SS`` (UTC).

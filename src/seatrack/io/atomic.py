@@ -42,6 +42,25 @@ class OutputError(OSError):
     """An output file cannot be written; the message names the file and the reason."""
 
 
+def _folder_problem(p: Path, create: bool) -> str | None:
+    """Why folder ``p`` cannot hold outputs (creating it when ``create``), or None."""
+    if p.exists() and not p.is_dir():
+        return f"{p} is a file, expected a folder"
+    for anc in p.parents:
+        if anc.exists():
+            if not anc.is_dir():
+                return f"cannot create the folder {p}, {anc} is a file"
+            break
+    if create:
+        try:
+            p.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            return f"cannot create the folder {p} ({exc.strerror})"
+    if p.exists() and not os.access(p, os.W_OK | os.X_OK):
+        return f"folder {p} is not writable"
+    return None
+
+
 def check_output_dir(path: str | os.PathLike[str], *, create: bool = True) -> Path:
     """Validate an output folder (create it, like ``mkdir -p``); return it as a :class:`Path`.
 
@@ -51,23 +70,12 @@ def check_output_dir(path: str | os.PathLike[str], *, create: bool = True) -> Pa
         When the path is a file, a parent is a file, the folder cannot be created, or it
         is not writable.
     """
-    p = Path(path)
     if str(path) == "":
         raise OutputError("an empty string is not a folder name")
-    if p.exists() and not p.is_dir():
-        raise OutputError(f"{p}: is a file, expected a folder")
-    for anc in p.parents:
-        if anc.exists():
-            if not anc.is_dir():
-                raise OutputError(f"{p}: cannot create the output folder, {anc} is a file")
-            break
-    if create:
-        try:
-            p.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OutputError(f"{p}: cannot create the output folder ({exc.strerror})") from None
-    if p.exists() and not os.access(p, os.W_OK | os.X_OK):
-        raise OutputError(f"{p}: folder is not writable")
+    p = Path(path)
+    problem = _folder_problem(p, create)
+    if problem is not None:
+        raise OutputError(f"{p}: {problem}")
     return p
 
 
@@ -85,10 +93,9 @@ def check_output_path(path: str | os.PathLike[str], *, create_parent: bool = Tru
         raise OutputError(f"{path!s}: not a file name")
     if p.is_dir():
         raise OutputError(f"{p}: is a directory, expected a file name")
-    try:
-        check_output_dir(p.parent, create=create_parent)
-    except OutputError as exc:
-        raise OutputError(f"{p}: {str(exc).split(': ', 1)[1]}") from None
+    problem = _folder_problem(p.parent, create_parent)
+    if problem is not None:
+        raise OutputError(f"{p}: {problem}")
     if p.exists() and not os.access(p, os.W_OK):
         raise OutputError(f"{p}: file is not writable")
     return p

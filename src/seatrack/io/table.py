@@ -107,17 +107,20 @@ class Check:
     hi: float = math.inf
     lo_open: bool = False
     hi_open: bool = False
+    note: str = ""
 
     def problem(self, value: float, cell: str | None = None) -> str | None:
         """Why ``value`` (written as ``cell`` in the file) is not allowed, or ``None``."""
         lo, hi = self.lo, self.hi
+        shown = cell if cell is not None else f"{value:g}"
+        if not math.isfinite(value):
+            return f"{self.column} = {_short(shown)} is not a finite number"
         if (
             lo < value < hi
             or (value == lo and not self.lo_open)
             or (value == hi and not self.hi_open)
         ):
             return None
-        shown = cell if cell is not None else f"{value:g}"
         return f"{self.column} = {_short(shown)} {self.rule()}"
 
     def rule(self) -> str:
@@ -128,7 +131,8 @@ class Check:
             return f"must be {'<' if self.hi_open else '<='} {self.hi:g}"
         a = "(" if self.lo_open else "["
         b = ")" if self.hi_open else "]"
-        return f"must be in {a}{self.lo:g}, {self.hi:g}{b}"
+        note = f" ({self.note})" if self.note else ""
+        return f"must be in {a}{self.lo:g}, {self.hi:g}{b}{note}"
 
 
 def between(
@@ -150,12 +154,12 @@ def coordinate(column: str) -> Check:
 
 def seconds(column: str) -> Check:
     """A time in seconds (relative, or Unix before 2100): ``|value| <=`` :data:`MAX_TIME_S`."""
-    return Check(column, -MAX_TIME_S, MAX_TIME_S)
+    return Check(column, -MAX_TIME_S, MAX_TIME_S, note="s, relative or Unix time before 2100")
 
 
 def unix_seconds(column: str) -> Check:
     """An absolute Unix time (s) from 1970-01-01 to before 2100-01-01."""
-    return Check(column, 0.0, MAX_TIME_S, hi_open=True)
+    return Check(column, 0.0, MAX_TIME_S, hi_open=True, note="Unix time, 1970 to 2100")
 
 
 def sigma(column: str, hi: float = math.inf) -> Check:

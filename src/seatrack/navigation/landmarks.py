@@ -42,7 +42,6 @@ landmarks are named by their order number.
 from __future__ import annotations
 
 import csv
-
 import struct
 from collections.abc import Sequence
 from dataclasses import dataclass

@@ -133,8 +133,8 @@ def register(app: typer.Typer) -> None:
             tracking_sensor,
         )
         from seatrack.filters.registry import METHODS
-        from seatrack.report.plots import error_figure, save, track_figure
         from seatrack.io.atomic import atomic_write
+        from seatrack.report.plots import error_figure, save, track_figure
         from seatrack.simulate.scenarios import MAX_RUNS, bundled_scenario, load_scenario
 
         console = Console()

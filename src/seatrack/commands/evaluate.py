@@ -102,9 +102,7 @@ def register(app: typer.Typer) -> None:
             summarize,
             tracking_sensor,
         )
-        from seatrack.simulate.scenarios import load_scenario, resolve_scenario
-
-        from seatrack.simulate.scenarios import MAX_RUNS
+        from seatrack.simulate.scenarios import MAX_RUNS, load_scenario, resolve_scenario
 
         sc = load_scenario(resolve_scenario(scenario))
         names = _methods(methods)

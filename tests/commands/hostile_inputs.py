@@ -109,14 +109,19 @@ def snapshot(paths: list[Path]) -> dict[Path, bytes | None]:
     return {p: (p.read_bytes() if p.is_file() else None) for p in paths}
 
 
-def assert_clean(res: Result, before: dict[Path, bytes | None], args: object = "") -> None:
-    """The contract of every command on any input (see the module docstring)."""
+def assert_clean(res: Result, before: dict[Path, bytes | None], args: list[object]) -> None:
+    """The contract of every command on any input (see the module docstring).
+
+    An error line names what is wrong: one of the files or options on the command line.
+    """
     where = f"args={args!r}\nstdout={res.out[-2000:]!r}\nstderr={res.err[-2000:]!r}"
     assert res.code in (0, 2), f"exit status {res.code}\n{where}"
     assert "Traceback" not in res.err and "internal error" not in res.err, where
     if res.code == 2:
         lines = [ln for ln in res.err.splitlines() if ln.strip()]
         assert len(lines) == 1 and lines[0].startswith("error: "), where
+        named = [str(a) for a in args if isinstance(a, Path) or str(a).startswith("-")]
+        assert any(n in lines[0] for n in named), f"the error names no file or option\n{where}"
         for p, old in before.items():
             now = p.read_bytes() if p.is_file() else None
             assert now == old, f"{p} changed by a failed run\n{where}"

@@ -111,7 +111,10 @@ def register(app: typer.Typer) -> None:
         option_in("--runs", n, 1, MAX_RUNS)
         option_in("--processes", processes, 1, MAX_PROCESSES)
         option_in("--seed", s, 0, 2**63 - 1)
-        sens = tracking_sensor(sc, sensor)
+        try:
+            sens = tracking_sensor(sc, sensor)
+        except ValueError as exc:
+            raise InputError(f"{'--sensor' if sensor is not None else sc.path}: {exc}") from None
         check_skip(skip, sens.scan_times(sc.duration).size, sens.name)
         pngs = [plots / "pos_rmse.png", plots / "anees.png"] if plots is not None else []
         prepare_outputs([csv_out, *pngs], [plots])

@@ -75,6 +75,11 @@ def test_mutated_plots(tmp_path_factory, data, method):
     _run(tmp_path_factory.mktemp("track"), data.draw(mutated_csv(PLOTS)), method)
 
 
+@pytest.mark.xfail(
+    reason="method-config TOML values are not range/type checked (q = -1 -> 'S is not positive "
+    "definite', a list -> TypeError): the config-layer rewrite; strict",
+    strict=True,
+)
 @settings(max_examples=50, deadline=None)
 @given(data=st.data(), method=st.sampled_from(sorted(METHODS)))
 def test_mutated_config(tmp_path_factory, data, method):

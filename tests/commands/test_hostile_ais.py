@@ -22,7 +22,9 @@ from pyais.encode import encode_dict
 from seatrack.io.ais import format_times, read_ais_csv
 from seatrack.io.table import decode_text
 
-SAMPLE = Path(__file__).resolve().parents[2] / "src/seatrack/data/ais/dk_gothenburg_20170705_cpa.csv"
+SAMPLE = (
+    Path(__file__).resolve().parents[2] / "src/seatrack/data/ais/dk_gothenburg_20170705_cpa.csv"
+)
 CSV_TEXT = "".join(SAMPLE.read_text().splitlines(keepends=True)[:41])
 
 
@@ -114,9 +116,14 @@ def test_every_input_line_is_accounted_for(tmp_path_factory, data, nmea):
 
 @pytest.mark.parametrize(
     ("case", "nmea"),
-    [pytest.param("blank", False, marks=ACCOUNTING),
-     pytest.param("empty_cells", False, marks=ACCOUNTING),
-     ("garbage", False), ("blank", True), ("cut", True), ("csv_line", True)],  # fmt: skip
+    [
+        pytest.param("blank", False, marks=ACCOUNTING),
+        pytest.param("empty_cells", False, marks=ACCOUNTING),
+        ("garbage", False),
+        ("blank", True),
+        ("cut", True),
+        ("csv_line", True),
+    ],  # fmt: skip
 )
 def test_item_3_lines_are_accounted_for(tmp_path, case, nmea):
     """The lines issue 13 item 3 found unaccounted: blank lines, rows of empty cells,
@@ -132,8 +139,8 @@ def test_item_3_lines_are_accounted_for(tmp_path, case, nmea):
 
 @ACCOUNTING
 @pytest.mark.parametrize(
-    ("column", "value"), [("mmsi", "1e30"), ("mmsi", "99999999999999999999"),
-                          ("time_utc", "1e308")],  # fmt: skip
+    ("column", "value"),
+    [("mmsi", "1e30"), ("mmsi", "99999999999999999999"), ("time_utc", "1e308")],  # fmt: skip
 )
 def test_invalid_values_are_rejected_with_a_reason(tmp_path, column, value):
     lines = CSV_TEXT.splitlines()

@@ -23,10 +23,9 @@ from seatrack.simulate.radar_echoes import channel_landmarks, river_route, simul
 PREVIOUS = b"previous output\n"
 
 
-@pytest.fixture(scope="module")
-def nav(tmp_path_factory: pytest.TempPathFactory) -> dict[str, object]:
-    """Small valid inputs: 1.2 s of echoes (~200 rows), the matching gyro log, an 8-landmark map."""
-    d = tmp_path_factory.mktemp("hostile_nav")
+def nav_inputs(d: Path) -> str:
+    """Write small valid inputs to ``d`` (echoes.csv: 1.2 s of echoes, ~200 rows; gyro.csv;
+    map.csv: 8 landmarks); returns the matching ``--start``."""
     route = river_route(2000.0, 4.0)
     sim = simulate_radar(route, channel_landmarks(route, 8, np.random.default_rng(1)),
                          np.random.default_rng(2))  # fmt: skip
@@ -37,7 +36,13 @@ def nav(tmp_path_factory: pytest.TempPathFactory) -> dict[str, object]:
     write_gyro(d / "gyro.csv", sim.gyro_t[g], sim.gyro_rate[g])
     write_map_csv(sim.nav_map, d / "map.csv")
     x0 = sim.truth[0]
-    start = f"{x0[0]:.1f},{x0[1]:.1f},{np.degrees(x0[2]):.2f},{np.hypot(x0[3], x0[4]):.2f}"
+    return f"{x0[0]:.1f},{x0[1]:.1f},{np.degrees(x0[2]):.2f},{np.hypot(x0[3], x0[4]):.2f}"
+
+
+@pytest.fixture(scope="module")
+def nav(tmp_path_factory: pytest.TempPathFactory) -> dict[str, object]:
+    d = tmp_path_factory.mktemp("hostile_nav")
+    start = nav_inputs(d)
     texts = {k: (d / f"{k}.csv").read_text() for k in ("echoes", "gyro", "map")}
     return {"dir": d, "start": start, "texts": texts}
 

@@ -79,7 +79,9 @@ def test_mutated_support(tmp_path_factory, data):
 @settings(max_examples=40, deadline=None)
 @given(
     option=st.sampled_from(["--sigma-deg", "--manoeuvres"]),
-    value=st.sampled_from(["nan", "inf", "0", "-1", "1e308", "abc", "", "600", "600,300", "1e-300"]),
+    value=st.sampled_from(
+        ["nan", "inf", "0", "-1", "1e308", "abc", "", "600", "600,300", "1e-300"]
+    ),
 )
 def test_options(tmp_path_factory, option, value):
     _run(tmp_path_factory.mktemp("tmaopt"), BEARINGS.encode(), None, option, value)

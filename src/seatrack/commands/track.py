@@ -70,11 +70,10 @@ def register(app: typer.Typer) -> None:
         out: Path = typer.Option(..., "--out", "-o", help="TRACK.csv to write (one row per plot)"),
     ) -> None:
         """Run a tracking filter over recorded radar/sonar plots."""
-        from seatrack.filters.registry import get_method
-        from seatrack.io.plots import read_plots
-
         from seatrack.commands.options import prepare_outputs
+        from seatrack.filters.registry import get_method
         from seatrack.io.atomic import atomic_path
+        from seatrack.io.plots import read_plots
 
         runner = get_method(method)
         cfg = load_config(config)

@@ -129,6 +129,8 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
     except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp_path.unlink()
+        if isinstance(exc, Exception) and str(tmp_path) in str(exc):  # name the destination
+            raise OutputError(str(exc).replace(str(tmp_path), str(dest))) from None
         if isinstance(exc, OSError) and not isinstance(exc, OutputError):
             raise OutputError(f"{dest}: write failed ({exc.strerror or exc})") from None
         raise

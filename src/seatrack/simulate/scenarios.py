@@ -717,8 +717,7 @@ def load_scenario(path: str | Path) -> Scenario:
         line = text[: exc.start].count(b"\n") + 1
         bad = text[exc.start : exc.start + 1].hex()
         raise InputError(
-            f"{p}, line {line}: not UTF-8 text (byte 0x{bad}: {exc.reason}); "
-            "TOML files are UTF-8"
+            f"{p}, line {line}: not UTF-8 text (byte 0x{bad}: {exc.reason}); TOML files are UTF-8"
         ) from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{p}: TOML syntax error: {exc}") from None

@@ -27,7 +27,10 @@ runs = 2
 position_m = [0.0, 0.0]
 course_deg = 30.0
 speed_kn = 8.0
-legs = [ { type = "straight", duration_s = 5.0 }, { type = "turn", turn_rate_dps = 2.0, angle_deg = 20.0 } ]
+legs = [
+  { type = "straight", duration_s = 5.0 },
+  { type = "turn", turn_rate_dps = 2.0, angle_deg = 20.0 },
+]
 
 [[targets]]
 name = "T1"

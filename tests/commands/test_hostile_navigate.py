@@ -65,28 +65,25 @@ def _check_output(path: Path, columns: list[str]) -> None:
             assert np.all(np.isfinite(t[c])), c
 
 
-def _navigate(nav: dict[str, object], paths: dict[str, Path], *extra: object) -> None:
-    out = paths["echoes"].parent / "nav_out.csv"
+def _command(cmd: str, nav: dict[str, object], paths: dict[str, Path], *extra: object) -> None:
+    """Run navigate (NAV.csv out) or survey (MAP.csv out) and check the contract."""
+    out = paths["echoes"].parent / f"{cmd}_out.csv"
     out.write_bytes(PREVIOUS)
-    args = ["navigate", "--map", paths["map"], "--echoes", paths["echoes"], "--gyro",
-            paths["gyro"], "--start", nav["start"], "--out", out, *extra]  # fmt: skip
+    args = [cmd, "--map", paths["map"], "--echoes", paths["echoes"], "--gyro", paths["gyro"],
+            "--start", nav["start"], "--out", out, *extra]  # fmt: skip
     before = snapshot([out])
     res = run_cli(*args)
     assert_clean(res, before, args)
     if res.code == 0:
-        _check_output(out, list(NAV_COLUMNS))
+        _check_output(out, list(NAV_COLUMNS) if cmd == "navigate" else ["x_m", "y_m"])
+
+
+def _navigate(nav: dict[str, object], paths: dict[str, Path], *extra: object) -> None:
+    _command("navigate", nav, paths, *extra)
 
 
 def _survey(nav: dict[str, object], paths: dict[str, Path], *extra: object) -> None:
-    out = paths["echoes"].parent / "map_out.csv"
-    out.write_bytes(PREVIOUS)
-    args = ["survey", "--map", paths["map"], "--echoes", paths["echoes"], "--gyro",
-            paths["gyro"], "--start", nav["start"], "--out", out, *extra]  # fmt: skip
-    before = snapshot([out])
-    res = run_cli(*args)
-    assert_clean(res, before, args)
-    if res.code == 0:
-        _check_output(out, ["x_m", "y_m"])
+    _command("survey", nav, paths, *extra)
 
 
 @settings(max_examples=80, deadline=None)

@@ -19,12 +19,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from pyais.encode import encode_dict
 
+from ais_samples import data_file
 from seatrack.io.ais import format_times, read_ais_csv
 from seatrack.io.table import decode_text
 
-SAMPLE = (
-    Path(__file__).resolve().parents[2] / "src/seatrack/data/ais/dk_gothenburg_20170705_cpa.csv"
-)
+SAMPLE = data_file("dk_gothenburg_20170705_cpa.csv")
 CSV_TEXT = "".join(SAMPLE.read_text().splitlines(keepends=True)[:41])
 
 

@@ -95,3 +95,14 @@ def test_nmea_reader(tmp_path_factory, data):
     p = tmp_path_factory.mktemp("nmea") / "log.nmea"
     p.write_bytes(data.draw(mutated_text(NMEA_TEXT)))
     _read(lambda q: read_ais([q]), p)
+
+
+@AIS_ENCODING
+@pytest.mark.parametrize(
+    ("name", "raw"),
+    [("a.nmea", b"\x80"), ("a.csv", b"\xf8" + CSV_TEXT.encode()), ("b.csv", b"\xef\xbb\xbf\xf8")],
+)
+def test_ais_reader_on_bytes_that_are_not_utf8(tmp_path, name, raw):
+    p = tmp_path / name
+    p.write_bytes(raw)
+    _read(lambda q: read_ais([q]), p)

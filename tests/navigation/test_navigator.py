@@ -143,3 +143,13 @@ def test_an_echo_log_too_long_to_step_is_refused_before_any_work():
     lm = LandmarkMap.from_arrays(np.array([[100.0, 100.0]]), np.array([False]), np.zeros(1), ["A"])
     with pytest.raises(ValueError, match=r"E.csv, line 3: the echo log spans .* at most 10000000"):
         navigate(lm, e, np.zeros(6), cfg)
+
+
+def test_an_echo_log_shorter_than_one_cycle_is_refused():
+    from seatrack.navigation.landmarks import LandmarkMap
+
+    e = Echoes(np.array([0.0, 0.01]), np.array([0.0, 0.02]), np.array([500.0, 500.0]), "E.csv",
+               np.array([2, 3]))  # fmt: skip
+    lm = LandmarkMap.from_arrays(np.array([[100.0, 100.0]]), np.array([False]), np.zeros(1), ["A"])
+    with pytest.raises(ValueError, match=r"E.csv, line 3: .* less than one filter cycle"):
+        navigate(lm, e, np.zeros(6), NavigatorConfig())

@@ -207,12 +207,17 @@ def _tick_count(et: FloatArray, start: float, dt: float, where: Echoes) -> int:
     """Number of predictor ticks from ``start`` to the last echo, bounded before any work."""
     span = float(et[-1]) - start
     n = span / dt
-    if not (np.isfinite(n) and 0 <= n <= MAX_TICKS):
-        last = int(et.size - 1)
-        loc = f"line {where.lines[last]}" if where.lines is not None else f"row {last + 1}"
+    last = int(et.size - 1)
+    loc = f"line {where.lines[last]}" if where.lines is not None else f"row {last + 1}"
+    if not (np.isfinite(n) and n <= MAX_TICKS):
         raise ValueError(
             f"{where.source}, {loc}: the echo log spans {span:g} s, {n:.3g} filter cycles of "
             f"{dt:g} s; at most {MAX_TICKS} are run (split the log)"
+        )
+    if n < 1:
+        raise ValueError(
+            f"{where.source}, {loc}: the echo log spans {span:g} s, less than one filter "
+            f"cycle ({dt:g} s)"
         )
     return int(np.floor(n))
 

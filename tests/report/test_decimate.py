@@ -5,7 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from seatrack.report.decimate import budget_tolerance, dp_ranks, mercator, pixel_size
+from seatrack.report.decimate import (
+    budget_tolerance,
+    dp_ranks,
+    mercator,
+    mercator_rows,
+    pixel_size,
+)
 
 
 def _seg_dist(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:
@@ -92,3 +98,16 @@ def test_mercator_and_pixel_size() -> None:
     np.testing.assert_allclose(y[:3], [0.0, 0.5, -0.5], atol=1e-6)  # square world
     np.testing.assert_allclose(y[3], np.log(np.tan(np.pi * 3 / 8)) / (2 * np.pi))
     assert pixel_size(0) == 1 / 256 and pixel_size(1) == 1 / 512
+
+
+def test_mercator_rows_is_mercator_of_the_rows() -> None:
+    rng = np.random.default_rng(2)
+    lat, lon = rng.uniform(-89, 89, 50), rng.uniform(-180, 180, 50)
+    rows = rng.integers(0, 50, 30)
+    lat0, lon0 = lat.copy(), lon.copy()
+    x, y = mercator_rows(lat, lon, rows)
+    xr, yr = mercator(lat[rows], lon[rows])
+    np.testing.assert_allclose(x, xr, rtol=0, atol=1e-15)
+    np.testing.assert_allclose(y, yr, rtol=1e-13, atol=1e-15)
+    np.testing.assert_array_equal(lat, lat0)  # computed in place, but not in the inputs
+    np.testing.assert_array_equal(lon, lon0)

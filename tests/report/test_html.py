@@ -44,6 +44,7 @@ DEAD_TILES = "http://127.0.0.1:9/{z}/{x}/{y}.png"
 SEA = (0xCF, 0xE1, 0xEC)
 LAND = (0xF1, 0xED, 0xE3)
 SIDEBAR_PX = 290
+FIELDS = ("t", "raw_lat", "raw_lon", "lat", "lon", "segment", "outlier")
 
 
 def _two_vessels() -> list[VesselTrack]:
@@ -105,8 +106,22 @@ def test_vessel_tracks_groups_sorted_and_unsorted_input_alike() -> None:
     assert [v.mmsi for v in a] == [v.mmsi for v in b] == sorted(set(mmsi[valid]))
     for u, v in zip(a, b, strict=True):
         assert np.all(np.diff(u.t) >= 0) and u.t.size == int(np.sum(valid & (mmsi == u.mmsi)))
-        for name in ("t", "raw_lat", "raw_lon", "lat", "lon", "segment", "outlier"):
+        for name in FIELDS:
             np.testing.assert_array_equal(getattr(u, name), getattr(v, name))
+
+
+def test_pages_of_views_and_of_copies_are_identical() -> None:
+    rng = np.random.default_rng(4)
+    n = 300
+    mmsi = np.repeat([7, 3, 9], 100)
+    t = np.tile(np.arange(100.0), 3)
+    lat, lon = 56 + rng.normal(0, 0.01, n), 7 + rng.normal(0, 0.01, n)
+    seg, out = np.repeat([0, 1, 2], 100), rng.random(n) < 0.1
+    views = vessel_tracks(mmsi, t, lat, lon, lat, lon, seg, out, np.ones(n, bool))
+    assert views[0].t.base is views[1].t.base  # slices of one gathered copy
+    copies = [VesselTrack(v.mmsi, *(np.array(getattr(v, f)) for f in FIELDS)) for v in views]
+    assert html_page(views) == html_page(copies)
+    assert html_page(views[::-1]) != html_page(views)  # order matters: not a stale view
 
 
 def test_page_options_reach_the_page(tmp_path: Path) -> None:

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-__all__ = ["budget_tolerance", "dp_ranks", "mercator", "pixel_size"]
+__all__ = ["budget_tolerance", "dp_ranks", "mercator", "mercator_rows", "pixel_size"]
 
 
 def mercator(lat_deg: FloatArray, lon_deg: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -35,6 +35,22 @@ def mercator(lat_deg: FloatArray, lon_deg: FloatArray) -> tuple[FloatArray, Floa
     """
     lat = np.radians(np.clip(lat_deg, -85.0511, 85.0511))
     return np.asarray(lon_deg, float) / 360.0, np.log(np.tan(np.pi / 4 + lat / 2)) / (2 * np.pi)
+
+
+def mercator_rows(
+    lat: FloatArray, lon: FloatArray, rows: IntArray
+) -> tuple[FloatArray, FloatArray]:
+    """:func:`mercator` of ``lat[rows], lon[rows]``, computed in place (two arrays in all)."""
+    x = np.take(lon, rows).astype(np.float64, copy=False)
+    x /= 360.0
+    y = np.take(lat, rows).astype(np.float64, copy=False)
+    np.clip(y, -85.0511, 85.0511, out=y)
+    y *= np.pi / 360.0
+    y += np.pi / 4
+    np.tan(y, out=y)
+    np.log(y, out=y)
+    y /= 2 * np.pi
+    return x, y
 
 
 def pixel_size(zoom: float) -> float:

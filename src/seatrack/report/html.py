@@ -18,8 +18,9 @@ chosen time. Large inputs are decimated to budgets, said on the page: see
 For headless-browser tests, the script sets on ``<body>`` ``data-vessels``, ``data-paths``
 (polylines drawn), ``data-vertices``, ``data-reports``, ``data-outliers``, ``data-land``
 (coast rings) and ``data-tiles`` (``off``, ``needs-http``, ``waiting``, ``failed``,
-``partial``, ``loaded``), and lists one ``<li class="vessel" data-mmsi data-parts data-vertices data-reports
-data-outliers>`` per vessel; small maps use SVG paths with class ``st-track st-v<MMSI>``.
+``partial``, ``loaded``), and lists one ``<li class="vessel" data-mmsi data-parts
+data-vertices data-reports data-outliers>`` per vessel; small maps use SVG paths with
+class ``st-track st-v<MMSI>``.
 """
 
 from __future__ import annotations
@@ -197,10 +198,34 @@ def write_geojson(
         json.dump(geojson(tracks, include_reports), fh, separators=(",", ":"))
 
 
+def _joined_view(parts: list[NDArray[Any]]) -> NDArray[Any] | None:
+    """The parts as one view when they are consecutive slices of one 1-D array (as
+    :func:`vessel_tracks` makes them), else ``None``."""
+    base = parts[0].base
+    if not isinstance(base, np.ndarray) or base.ndim != 1 or not base.flags.c_contiguous:
+        return None
+    item = base.itemsize
+    ptr = base.__array_interface__["data"][0]
+    pos = parts[0].__array_interface__["data"][0]
+    start = (pos - ptr) // item
+    for p in parts:
+        if p.base is not base or p.ndim != 1 or not p.flags.c_contiguous:
+            return None
+        if p.__array_interface__["data"][0] != pos:
+            return None
+        pos += p.size * item
+    return base[start : start + (pos - ptr) // item - start]
+
+
 def _concat(tracks: Sequence[VesselTrack], name: str, dtype: Any) -> NDArray[Any]:
+    """One field of all tracks, concatenated (a view, not a copy, when it can be)."""
     if not tracks:
         return np.zeros(0, dtype)
-    return np.concatenate([np.asarray(getattr(v, name), dtype) for v in tracks])
+    parts = [getattr(v, name) for v in tracks]
+    joined = _joined_view(parts)
+    if joined is not None and joined.dtype == dtype:
+        return joined
+    return np.concatenate([np.asarray(p, dtype) for p in parts])
 
 
 def html_page(

@@ -12,9 +12,10 @@ reports, thousands of vessels) stays a page a browser can draw:
   simplified by Douglas-Peucker in Web Mercator with *one* tolerance for all vessels, the
   smallest that keeps at most ``max_vertices`` vertices (never finer than a tenth of a
   pixel at zoom 18, which is lossless on screen);
-* **reports**: the usable raw reports, every ``k``-th per vessel when there are more than
-  ``max_reports`` (``k`` the smallest stride that fits);
-* **outliers**: every outlier, every ``k``-th beyond ``max_outliers``;
+* **reports**: the usable raw reports, 1 in ``k`` when there are more than ``max_reports``
+  (``k`` the smallest stride that fits; rows are grouped by vessel, so every vessel keeps
+  1 in ``k`` of its own);
+* **outliers**: every outlier, 1 in ``k`` beyond ``max_outliers``;
 * **land**: the Natural Earth 1:10m land in a box three times the tracks' extent
   (:mod:`seatrack.report.land`), simplified to ``max_land_vertices`` with the detail spent
   near the tracks, drawn under the tiles: it is what the page shows when the browser is
@@ -41,7 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.report.decimate import budget_tolerance, dp_ranks, mercator, pixel_size
+from seatrack.report.decimate import budget_tolerance, dp_ranks, mercator_rows, pixel_size
 from seatrack.report.land import land_rings
 
 FloatArray = NDArray[np.float64]
@@ -142,22 +143,11 @@ def _offsets(counts: IntArray) -> list[int]:
     return np.r_[0, np.cumsum(counts)].astype(np.int64).tolist()
 
 
-def _stride_pick(vessel: IntArray, n_vessels: int, budget: int) -> tuple[IntArray, int]:
-    """Rows kept (every k-th per vessel, k the smallest stride within ``budget``) and k."""
-    n = vessel.size
+def _stride(n: int, budget: int) -> int:
+    """Smallest ``k`` with ``ceil(n / k) <= budget`` (0 when nothing may be kept)."""
     if n <= budget:
-        return np.arange(n), 1
-    if budget == 0:
-        return np.zeros(0, np.int64), 0
-    counts = np.bincount(vessel, minlength=n_vessels)
-    first = np.r_[0, np.cumsum(counts)[:-1]]
-    rank = np.arange(n) - first[vessel]  # index of the row within its vessel
-    k = max(1, n // budget)
-    while True:
-        kept = int(np.sum((counts + k - 1) // k))
-        if kept <= budget:
-            return np.flatnonzero(rank % k == 0), k
-        k += max(1, k // 8)
+        return 1
+    return 0 if budget == 0 else -(-n // budget)
 
 
 def _track_parts(
@@ -205,7 +195,7 @@ def page_data(
     t0 = float(np.nanmin(t)) if t.size and np.isfinite(t).any() else 0.0
 
     rows, starts = _track_parts(vessel, segment, lat, lon)
-    x, y = mercator(lat[rows], lon[rows])
+    x, y = mercator_rows(lat, lon, rows)
     stops = np.r_[starts[1:], rows.size][: starts.size].astype(np.int64)
     rank = dp_ranks(x, y, starts, stops)
     del x, y
@@ -217,12 +207,13 @@ def page_data(
 
     usable = np.isfinite(raw_lat) & np.isfinite(raw_lon)
     bad = usable & outlier
+    # beyond a budget, 1 row in k (rows are grouped by vessel: 1 in k of each vessel's)
     rep_rows = np.flatnonzero(usable & ~outlier)
-    pick, rep_stride = _stride_pick(vessel[rep_rows], nv, o.max_reports)
-    rep_rows = rep_rows[pick]
+    rep_stride = _stride(rep_rows.size, o.max_reports)
+    rep_rows = rep_rows[:: max(rep_stride, 1)] if rep_stride else rep_rows[:0]
     out_rows = np.flatnonzero(bad)
-    pick, out_stride = _stride_pick(vessel[out_rows], nv, o.max_outliers)
-    out_rows = out_rows[pick]
+    out_stride = _stride(out_rows.size, o.max_outliers)
+    out_rows = out_rows[:: max(out_stride, 1)] if out_stride else out_rows[:0]
 
     view = robust_bounds(lat, lon, o.percentile, rows=rows) or robust_bounds(
         raw_lat, raw_lon, o.percentile

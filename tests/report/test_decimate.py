@@ -90,6 +90,9 @@ def test_budget_tolerance_meets_the_budget() -> None:
     assert budget_tolerance(rank, 10_000, floor=0.5) == 0.5
     with pytest.raises(ValueError):
         budget_tolerance(rank, -1)
+    # only end points (two-point lines), more than the budget: nothing else to drop
+    ends = dp_ranks(np.arange(6.0), np.zeros(6), np.array([0, 2, 4]), np.array([2, 4, 6]))
+    assert budget_tolerance(ends, 2, floor=0.1) == 0.1
 
 
 def test_mercator_and_pixel_size() -> None:

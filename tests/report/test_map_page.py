@@ -102,6 +102,28 @@ def test_no_budget_pressure_keeps_everything() -> None:
     assert len(d["la"]) == 600  # random walks: no vertex is redundant at 1/10 pixel, z18
 
 
+def test_vessels_without_rows_are_counted_as_empty() -> None:
+    lat = np.array([56.0, 56.1, 56.2])
+    d = page_data(
+        np.array([1, 2, 3]),
+        np.array([2, 0, 1]),
+        np.arange(3.0),
+        lat,
+        lat,
+        lat,
+        lat,
+        np.zeros(3, np.int64),
+        np.array([False, True, True]),
+    )
+    assert d["nusable"] == [2, 0, 1] and d["noutliers"] == [1, 0, 1]
+    assert d["vpart"] == [0, 1, 1, 2] and d["rv"] == [0, 1, 1, 1] and d["ov"] == [0, 1, 1, 2]
+    z = np.zeros(3, np.int64)
+    last_empty = page_data(
+        np.array([1, 2]), np.array([3, 0]), np.arange(3.0), lat, lat, lat, lat, z, z > 0
+    )
+    assert last_empty["nusable"] == [3, 0] and last_empty["noutliers"] == [0, 0]
+
+
 def test_interleaved_segments_are_grouped() -> None:
     lat = np.array([56.0, 56.1, 56.2, 56.3])
     d = page_data(

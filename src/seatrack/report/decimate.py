@@ -148,7 +148,7 @@ def budget_tolerance(rank: FloatArray, max_vertices: int, floor: float = 0.0) ->
     r = rank[np.isfinite(rank)]
     n_ends = int(np.sum(np.isposinf(rank)))
     room = max_vertices - n_ends
-    if np.sum(r > floor) <= room:
+    if r.size == 0 or np.sum(r > floor) <= room:
         return float(floor)
     if room <= 0:
         return float(r.max())

@@ -261,9 +261,9 @@ def _tq(t: FloatArray, t0: float) -> IntArray:
 
 def _per_vessel(flag: NDArray[np.bool_], vfirst: IntArray, counts: IntArray) -> list[int]:
     """Number of true flags of each vessel (rows grouped by vessel)."""
-    if flag.size == 0:
-        return [0] * int(counts.size)
-    c = np.add.reduceat(flag.astype(np.int64), np.minimum(vfirst, flag.size - 1))
+    if counts.size == 0:
+        return []
+    c = np.add.reduceat(np.r_[flag.astype(np.int64), 0], vfirst)  # the 0 closes the last
     return np.where(counts > 0, c, 0).tolist()
 
 

@@ -111,8 +111,9 @@ def measure(
         text = page.read_text(encoding="utf-8")
     data = json.loads(text.split('id="seatrack-data">', 1)[1].split("</script>", 1)[0])
     a_time, a_size = anchor(vt)
+    group = "-" if args is None else f"{best_g:.2f}"
     print(
-        f"{name:<34} {n:>11,} {len(vt):>7,} {best_g:>8.2f} {best_w:>8.2f} "
+        f"{name:<34} {n:>11,} {len(vt):>7,} {group:>8} {best_w:>8.2f} "
         f"{len(text) / 1e6:>8.2f} {len(data['la']):>9,} {a_time:>8.2f} {a_size / 1e6:>9.1f} "
         f"{a_size / len(text):>8.1f}"
     )

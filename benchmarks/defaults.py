@@ -343,8 +343,14 @@ def print_set(ss: ScenarioSet, rows: list[dict[str, Any]], lines: list[str], n: 
     for r in rows:
         r["ratio"] = r.get("pos", math.nan) / best
     print(f"\n== {ss.name}: {ss.description} ({n} runs) ==")
-    cols = [("filter", "filter"), ("kind", "row"), ("pos", "pos RMSE m", ".4g"),
-            ("vel", "vel RMSE m/s", ".3g"), ("ratio", "/best q", ".3f"), ("note", "note")]  # fmt: skip
+    cols = [
+        ("filter", "filter"),
+        ("kind", "row"),
+        ("pos", "pos RMSE m", ".4g"),
+        ("vel", "vel RMSE m/s", ".3g"),
+        ("ratio", "/best q", ".3f"),
+        ("note", "note"),
+    ]
     print(format_table(rows, cols))
     print("targets:")
     print("\n".join(lines) if lines else "  (none)")

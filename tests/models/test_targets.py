@@ -73,7 +73,9 @@ def test_derived_noise_parameters() -> None:
     assert 1 / (1 - b) == pytest.approx(SHIP.manoeuvre_time, rel=0.01)
     M = FIGHTER.transition_matrix(2.0)
     np.testing.assert_allclose(M.sum(1), 1.0)
-    assert FIGHTER.q_turn_rate == pytest.approx(FIGHTER.turn_rate_typical**2 / 1.0)
+    assert FIGHTER.q_turn_rate == pytest.approx(FIGHTER.turn_rate_typical**2 / 15.0)
+    assert FIGHTER.q_turn_rate_onset == pytest.approx(FIGHTER.turn_rate_typical**2 / 1.0)
+    assert AIRCRAFT.q_tangential(4.0) == pytest.approx(AIRCRAFT.accel_tangential**2 * 4.0)
     with pytest.raises(ValueError, match="dt must be a positive"):
         SHIP.q_steady(0.0)
 

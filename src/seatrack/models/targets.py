@@ -16,8 +16,10 @@ of filter needs, as documented rules of thumb:
 * Singer model (Singer 1970; Li & Jilkov 2003, sec. IV): manoeuvre time constant
   ``tau_m`` = the typical manoeuvre duration, acceleration variance
   ``sigma_m^2 = A_max^2 / 3 (1 + 4 P_max - P_0)``.
-* Coordinated turn: turn-rate random-walk PSD ``q_omega = omega_typ^2 / t_onset`` (the
-  turn rate can reach its typical value within the onset time of a turn).
+* Coordinated turn: white acceleration ``q = a_t^2 T`` for the speed changes
+  (``a_t`` the tangential acceleration) and turn-rate random-walk PSD
+  ``q_omega = omega_typ^2 / tau_m`` (the turn rate wanders by its typical value over one
+  manoeuvre time; ``omega_typ^2 / t_onset`` is the fast variant).
 * IMM mode persistence: ``p_stay = exp(-T / tau)`` with ``tau`` the mean sojourn time of
   the mode (straight legs for the non-manoeuvring mode, manoeuvre duration for the
   manoeuvring one); for ``T << tau`` this is the familiar ``1 - T / tau`` (mean sojourn
@@ -95,6 +97,7 @@ _DOCUMENTED = (
     "accel_steady",
     "accel_typical",
     "accel_max",
+    "accel_tangential",
     "turn_rate_typical",
     "turn_rate_max",
     "manoeuvre_time",
@@ -117,6 +120,8 @@ class TargetClass:
     accel_typical : m/s^2 -- lateral acceleration of a typical manoeuvre
         (``turn_rate_typical * speed_typical``, rounded).
     accel_max : m/s^2 -- the largest acceleration of the class.
+    accel_tangential : m/s^2 -- typical along-track acceleration of a speed change (what a
+        coordinated-turn model's white acceleration must cover).
     turn_rate_typical, turn_rate_max : rad/s.
     manoeuvre_time : s -- typical duration of a manoeuvre (Singer's time constant).
     straight_time : s -- mean time between manoeuvres.
@@ -131,6 +136,7 @@ class TargetClass:
     accel_steady: float
     accel_typical: float
     accel_max: float
+    accel_tangential: float
     turn_rate_typical: float
     turn_rate_max: float
     manoeuvre_time: float
@@ -146,6 +152,8 @@ class TargetClass:
                 raise ValueError(f"target class {self.name}: {f} must be positive, got {v!r}")
         if not self.speed_typical <= self.speed_max:
             raise ValueError(f"target class {self.name}: speed_typical > speed_max")
+        if not self.accel_tangential <= self.accel_max:
+            raise ValueError(f"target class {self.name}: accel_tangential > accel_max")
         if not self.accel_steady <= self.accel_typical <= self.accel_max:
             raise ValueError(
                 f"target class {self.name}: need accel_steady <= accel_typical <= accel_max"
@@ -195,9 +203,21 @@ class TargetClass:
         (m^2/s^5)."""
         return 2.0 * self.singer_sigma**2 / self.singer_tau
 
+    def q_tangential(self, dt: float) -> float:
+        """White-acceleration PSD of a coordinated-turn model, m^2/s^3
+        (``accel_tangential^2 T``: speed changes are all that is left to it)."""
+        return self.accel_tangential**2 * _positive(dt, "dt")
+
     @property
     def q_turn_rate(self) -> float:
-        """Coordinated-turn turn-rate random-walk PSD, rad^2/s^3 (``omega_typ^2 / t_onset``)."""
+        """Coordinated-turn turn-rate random-walk PSD, rad^2/s^3: ``omega_typ^2 / tau_m``
+        (the turn rate wanders by its typical value over one manoeuvre time)."""
+        return self.turn_rate_typical**2 / self.manoeuvre_time
+
+    @property
+    def q_turn_rate_onset(self) -> float:
+        """The fast variant ``omega_typ^2 / t_onset`` (the turn rate can reach its typical
+        value within the onset time of a turn), rad^2/s^3."""
         return self.turn_rate_typical**2 / self.turn_onset_time
 
     def p_stay(self, dt: float) -> tuple[float, float]:
@@ -233,6 +253,7 @@ SHIP = TargetClass(
     accel_steady=0.01,
     accel_typical=0.05,
     accel_max=0.5,
+    accel_tangential=0.05,
     turn_rate_typical=0.5 * _DEG,
     turn_rate_max=3.0 * _DEG,
     manoeuvre_time=180.0,
@@ -247,6 +268,7 @@ SHIP = TargetClass(
         "accel_steady": _ASSUMED + ": course kept within ~1 deg and speed within ~0.2 kn "
         "over a minute at 12 kn",
         "accel_typical": "turn_rate_typical x speed_typical = 0.0087 rad/s x 6.2 m/s",
+        "accel_tangential": _ASSUMED + ": a change of 3 kn in 30 s (engine orders)",
         "accel_max": "speed change and turn of a small fast craft: 3 deg/s at 10 m/s = "
         "0.52 m/s^2; merchant ships stay below 0.2 m/s^2 (" + _IMO + ")",
         "turn_rate_typical": _COCKCROFT + ": 90 deg in 2-3 min (0.5-0.75 deg/s)",
@@ -267,6 +289,7 @@ SUBMARINE = TargetClass(
     accel_steady=0.005,
     accel_typical=0.04,
     accel_max=0.3,
+    accel_tangential=0.03,
     turn_rate_typical=0.5 * _DEG,
     turn_rate_max=2.0 * _DEG,
     manoeuvre_time=120.0,
@@ -280,9 +303,9 @@ SUBMARINE = TargetClass(
         "accel_steady": _ASSUMED + ": submerged, no sea-state forcing (half the ship's)",
         "accel_typical": "turn_rate_typical x speed_typical = 0.0087 rad/s x 4.1 m/s",
         "accel_max": _ASSUMED + ": 2 deg/s at 8 m/s (0.28 m/s^2)",
+        "accel_tangential": _ASSUMED + ": a change of 2 kn in 30 s",
         "turn_rate_typical": _ASSUMED + ": as a ship of the same length (" + _COCKCROFT + ")",
-        "turn_rate_max": _ASSUMED + ": tactical diameter ~4 L, L = 100 m, at 8 kn "
-        "(" + _IMO + ")",
+        "turn_rate_max": _ASSUMED + ": tactical diameter ~4 L, L = 100 m, at 8 kn (" + _IMO + ")",
         "manoeuvre_time": _SINGER,
         "straight_time": _ASSUMED + ": long quiet legs of 20 min and more",
         "turn_onset_time": _IMO + " (as the ship)",
@@ -297,6 +320,7 @@ AIRCRAFT = TargetClass(
     accel_steady=0.1,
     accel_typical=5.0,
     accel_max=G0 * math.tan(30 * _DEG),
+    accel_tangential=1.0,
     turn_rate_typical=3.0 * _DEG,
     turn_rate_max=3.0 * _DEG,
     manoeuvre_time=60.0,
@@ -311,6 +335,7 @@ AIRCRAFT = TargetClass(
         "(28 deg bank)",
         "accel_max": "ICAO: holding turns at 25 deg bank or rate one; 30 deg bank "
         "(g tan 30 = 5.7 m/s^2) is the usual airliner limit",
+        "accel_tangential": _ASSUMED + ": terminal-area speed changes of about 2 kn/s",
         "turn_rate_typical": "SKYbrary 'Standard Rate Turn': 3 deg/s",
         "turn_rate_max": "SKYbrary: rate one (3 deg/s) at low speed, rate half (1.5 deg/s) "
         "above 250 kn",
@@ -328,6 +353,7 @@ FIGHTER = TargetClass(
     accel_steady=0.5,
     accel_typical=4.0 * G0,
     accel_max=9.0 * G0,
+    accel_tangential=G0,
     turn_rate_typical=4.0 * G0 / 250.0,
     turn_rate_max=9.0 * G0 / 250.0,
     manoeuvre_time=15.0,
@@ -339,8 +365,8 @@ FIGHTER = TargetClass(
         "speed_max": "Mach 2 at altitude (~600 m/s), F-16 class",
         "accel_steady": _ASSUMED + ": between manoeuvres of an air-combat engagement",
         "accel_typical": "3-6 g turns (the issue's fighter scenario), 4 g typical",
-        "accel_max": "F-16: first fighter built to sustain 9 g turns (7 g with a "
-        "centreline tank)",
+        "accel_max": "F-16: first fighter built to sustain 9 g turns (7 g with a centreline tank)",
+        "accel_tangential": _ASSUMED + ": 1 g along track (afterburner / speed brake)",
         "turn_rate_typical": "accel_typical / speed_typical (4 g at 250 m/s = 9 deg/s)",
         "turn_rate_max": "accel_max / speed_typical (9 g at 250 m/s = 20 deg/s)",
         "manoeuvre_time": _SINGER + ": evasive manoeuvre 10-20 s",

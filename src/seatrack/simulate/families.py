@@ -90,8 +90,7 @@ def seed_split(seed: int) -> str:
     if seed in HEADLINE_SEEDS:
         return "headline"
     raise ValueError(
-        f"seed {seed} is in neither the tuning range [0, 1e6) nor the headline "
-        f"range [1e6, 2e6)"
+        f"seed {seed} is in neither the tuning range [0, 1e6) nor the headline range [1e6, 2e6)"
     )
 
 

@@ -500,6 +500,41 @@ def extra_configs(dt: float, tc: TargetClass) -> dict[str, dict[str, Any]]:
     }  # fmt: skip
 
 
+def consistency(n: int) -> None:
+    """Fighter set, TUNING seeds: position consistency (mean of the squared errors over the
+    reported variances, per axis; 1 = consistent) and how often the largest model
+    probability exceeds 0.99, for the multiple-model methods."""
+    from defaults import SKIP, nominal_config
+    from seatrack.filters.registry import get_method
+    from seatrack.io.plots import PlotTrack
+
+    scs = [SETS["fighter"].make(k) for k in seeds(n, True)]
+    cfgs = {
+        "mm-rangerate": ("mm-rangerate", {}),
+        "mm-rangerate g=5 sa=10": ("mm-rangerate", {"accel_g": 5.0, "sigma_accel_mps2": 10.0}),
+        "mm": ("mm", {}),
+        "imm": ("imm", {}),
+        "imm +rr qct=1000 qw=1e-3 qcv=0.01": (
+            "imm", {"use_range_rate": True, "q_ct": 1000.0, "q_omega": 1e-3, "q_cv": 0.01}
+        ),
+    }  # fmt: skip
+    for label, (method, cfg) in cfgs.items():
+        z2, pmax = [], []
+        for sc in scs:
+            p = sc.plots
+            track = PlotTrack("1", p.t, p.range, p.azimuth, None, p.range_rate, p.sensor,
+                              p.sensor_vel, np.arange(len(p)))  # fmt: skip
+            cols = get_method(method)(track, {**nominal_config(sc), **cfg})
+            ex = (cols["x_m"] - sc.truth[:, 0]) / cols["std_x_m"]
+            ey = (cols["y_m"] - sc.truth[:, 1]) / cols["std_y_m"]
+            z2.append(((ex**2 + ey**2) / 2)[SKIP:])
+            probs = [cols[c] for c in cols if c.startswith("p_")]
+            pmax.append(np.max(np.stack(probs), 0)[SKIP:])
+        e2, pm = np.concatenate(z2), np.concatenate(pmax)
+        print(f"{label:36s} squared error / variance {e2.mean():5.2f}  "
+              f"max model probability > 0.99 on {np.mean(pm > 0.99):.2f} of scans")  # fmt: skip
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     from seatrack.models.targets import target_class
 
@@ -508,7 +543,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap.add_argument("--sets", default=",".join(SETS))
     ap.add_argument("--methods", default="ekf,turning,robust-adaptive,mm-rangerate,imm")
     ap.add_argument("--headline", action="store_true", help="headline seeds (default tuning)")
+    ap.add_argument("--consistency", action="store_true", help="multiple-model consistency")
     a = ap.parse_args(argv)
+    if a.consistency:
+        consistency(a.runs)
+        return
     tuning = not a.headline
     print(f"seeds: {'TUNING' if tuning else 'HEADLINE'}")
     for name in a.sets.split(","):

@@ -264,6 +264,37 @@ def oracle_policy(scs: Sequence[Scenario], q_small: float, ct: bool):
     return policy
 
 
+def mode_q_policy(qs: Sequence[float], p_stay: Sequence[float]):
+    """ONE CV EKF whose q is the mode-probability mixture ``sum_j mu_j^- q_j`` of a Markov
+    chain over process-noise levels; ``mu`` is updated from the innovation likelihoods
+    ``N(y; 0, H F P F^T H^T + q_j H Q1 H^T + R)`` of each level (a "raise Q on a Bayesian
+    manoeuvre decision" filter: one state, one update, M likelihoods)."""
+    q = np.asarray(qs, dtype=float)
+    M = q.size
+    ps = np.asarray(p_stay, dtype=float)
+    PI = np.where(np.eye(M) > 0, ps[:, None], ((1 - ps) / max(M - 1, 1))[:, None])
+    st: dict[str, Any] = {}
+
+    def policy(ctx: dict[str, Any]) -> None:
+        if ctx["stage"] == "q":
+            mu = st.get("mu", np.full((ctx["B"], M), 1.0 / M))
+            st["prior"] = mu @ PI
+            ctx["q"] = st["prior"] @ q
+            return
+        if ctx["stage"] != "R":
+            return
+        y, S0, HQ = ctx["y"], ctx["S0"], ctx["HQ1H"]
+        S = S0[:, None] + q[None, :, None, None] * HQ[:, None]  # (B, M, m, m)
+        _, logdet = np.linalg.slogdet(S)
+        maha = np.einsum("bi,bjik,bk->bj", y, np.linalg.inv(S), y)
+        lw = np.log(np.maximum(st["prior"], 1e-300)) - 0.5 * (maha + logdet)
+        lw -= lw.max(-1, keepdims=True)
+        mu = np.exp(lw)
+        st["mu"] = mu / mu.sum(-1, keepdims=True)
+
+    return policy
+
+
 def hybrid_policy(cm: Callable[[dict[str, Any]], None], turn: Callable[[dict[str, Any]], None]):
     """``q = max(q_cm, q_turn)``: covariance matching reacts at a turn's onset, the
     centripetal term keeps q up through a steady turn."""
@@ -458,6 +489,8 @@ def variants_for(set_name: str, dt: float, tc: TargetClass) -> dict[str, Callabl
         "hybrid cm0.7+centripetal": lambda: hybrid_policy(
             cm_policy(1e-4, 1e5, 0.7), turning_policy(0.5, 1.0, 1e-4, 1.0)
         ),
+        "mode-q L5": lambda: mode_q_policy(L5, [0.95] * 5),
+        "mode-q+class": lambda: mode_q_policy((tc.q_steady(dt), tc.q_max(dt)), tc.p_stay(dt)),
         "ORACLE q=((wv)^2+at^2)T": lambda scs: oracle_policy(scs, tc.q_steady(dt), ct=False),
         "ORACLE ct(true w)": lambda scs: oracle_policy(scs, tc.q_steady(dt), ct=True),
     }

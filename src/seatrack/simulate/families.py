@@ -42,7 +42,7 @@ from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import make_smoothing_spline
+from scipy.interpolate import BSpline, make_smoothing_spline
 
 from seatrack.filters.base import Plots, SensorNoise
 from seatrack.geometry import G0, course_speed, wrap_2pi
@@ -242,8 +242,8 @@ class AisStretch:
     duration: float
     turn: float
     split: str
-    sx: object
-    sy: object
+    sx: BSpline
+    sy: BSpline
 
 
 def _vessel_segments(source: str) -> list[tuple[int, FloatArray, FloatArray]]:
@@ -266,7 +266,7 @@ def _vessel_segments(source: str) -> list[tuple[int, FloatArray, FloatArray]]:
     return out
 
 
-def _fit_path(t: FloatArray, p: FloatArray) -> tuple[object, object]:
+def _fit_path(t: FloatArray, p: FloatArray) -> tuple[BSpline, BSpline]:
     """Smoothing splines x(t), y(t); reports more than max(15 m, 4 robust sigma) off the
     first fit (frozen positions and catch-up jumps) are dropped and the fit repeated."""
     lam = _SPLINE_SIGMA**2 / _SPLINE_Q
@@ -290,14 +290,14 @@ def ais_stretches(duration: float = 1200.0, step: float = 300.0) -> tuple[AisStr
     acceleration stays <= 1 m/s^2 and the turn rate <= 5 deg/s. Vessels are sorted and
     alternately assigned to the tuning and the headline split.
     """
-    found: list[tuple[str, int, float, float, float, object, object]] = []
+    found: list[tuple[str, int, float, float, float, BSpline, BSpline]] = []
     for source in AIS_FILES:
         for mmsi, t, p in _vessel_segments(source):
             sx, sy = _fit_path(t - t[0], p)
             for s in np.arange(0.0, t[-1] - t[0] - duration + 1e-9, step):
                 g = np.arange(s, s + duration + 1e-9, 2.0)
-                vx, vy = sx.derivative()(g), sy.derivative()(g)  # type: ignore[attr-defined]
-                ax, ay = sx.derivative(2)(g), sy.derivative(2)(g)  # type: ignore[attr-defined]
+                vx, vy = sx.derivative()(g), sy.derivative()(g)
+                ax, ay = sx.derivative(2)(g), sy.derivative(2)(g)
                 spd = np.hypot(vx, vy)
                 if spd.min() < 1.5 or np.hypot(ax, ay).max() > 1.0:
                     continue
@@ -323,9 +323,9 @@ def _stretch_trajectory(st: AisStretch, dt: float) -> Trajectory:
     pos = np.zeros((t.size, 3))
     vel = np.zeros((t.size, 3))
     acc = np.zeros((t.size, 3))
-    pos[:, 0], pos[:, 1] = sx(tt), sy(tt)  # type: ignore[operator]
-    vel[:, 0], vel[:, 1] = sx.derivative()(tt), sy.derivative()(tt)  # type: ignore[attr-defined]
-    acc[:, 0], acc[:, 1] = sx.derivative(2)(tt), sy.derivative(2)(tt)  # type: ignore[attr-defined]
+    pos[:, 0], pos[:, 1] = sx(tt), sy(tt)
+    vel[:, 0], vel[:, 1] = sx.derivative()(tt), sy.derivative()(tt)
+    acc[:, 0], acc[:, 1] = sx.derivative(2)(tt), sy.derivative(2)(tt)
     crs, spd = course_speed(vel[:, 0], vel[:, 1])
     w = (vel[:, 1] * acc[:, 0] - vel[:, 0] * acc[:, 1]) / np.maximum(spd, 1e-9) ** 2
     return Trajectory(t, pos, vel, acc, np.asarray(wrap_2pi(crs)), np.asarray(spd), w)

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 from hostile_inputs import mutated_csv, mutated_text
-from hypothesis import given, settings
+from hypothesis import Phase, given, settings
 from hypothesis import strategies as st
 from test_hostile_ais import CSV_TEXT, NMEA_TEXT
 from test_hostile_navigate import nav_inputs
@@ -71,7 +71,7 @@ AIS_ENCODING = pytest.mark.xfail(
 def test_csv_readers(texts, tmp_path_factory, name):
     d = tmp_path_factory.mktemp(name)
 
-    @settings(max_examples=60, deadline=None)
+    @settings(max_examples=60, deadline=None, phases=(Phase.explicit, Phase.reuse, Phase.generate))
     @given(data=st.data())
     def check(data: st.DataObject) -> None:
         p = d / f"{name}.csv"

@@ -14,12 +14,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 from hostile_inputs import assert_clean, mutated_csv, mutated_text, run_cli, snapshot
-from hypothesis import given, settings
+from hypothesis import Phase, given, settings
 from hypothesis import strategies as st
 
 from seatrack.filters.registry import METHODS
 from seatrack.simulate import Leg, NoiseModel, observe, trajectory
 
+NO_SHRINK = (Phase.explicit, Phase.reuse, Phase.generate)
 CONFIG = "q = 5.0\nsigma_range_m = 20.0\nsigma_azimuth_deg = 0.3\n"
 
 
@@ -80,7 +81,7 @@ def test_mutated_plots(tmp_path_factory, data, method):
     "definite', a list -> TypeError): the config-layer rewrite; strict",
     strict=True,
 )
-@settings(max_examples=50, deadline=None)
+@settings(max_examples=50, deadline=None, phases=NO_SHRINK)  # an expected failure: no shrinking
 @given(data=st.data(), method=st.sampled_from(sorted(METHODS)))
 def test_mutated_config(tmp_path_factory, data, method):
     _run(tmp_path_factory.mktemp("trackcfg"), PLOTS.encode(), method,

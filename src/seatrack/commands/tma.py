@@ -77,7 +77,11 @@ def register(app: typer.Typer) -> None:
 
         if not (sigma_deg > 0 and math.isfinite(sigma_deg)):
             raise InputError(f"--sigma-deg must be a positive number of degrees, got {sigma_deg}")
+        from seatrack.commands.options import prepare_outputs
+        from seatrack.io.atomic import atomic_path, atomic_write
+
         sigma = math.radians(sigma_deg)
+        prepare_outputs([out, plot])
         contacts = read_bearings(bearings, default_sigma=sigma)
         sup = read_support(support) if support is not None else {}
         unknown = sorted(set(sup) - set(contacts))
@@ -95,13 +99,19 @@ def register(app: typer.Typer) -> None:
                         f"--manoeuvres: {times[0]:g} s is not after the first bearing of "
                         f"contact {cid} ({b.t[0]:g} s)"
                     )
+                if times and times[-1] >= b.t[-1]:
+                    raise InputError(
+                        f"--manoeuvres: {times[-1]:g} s is not before the last bearing of "
+                        f"contact {cid} ({b.t[-1]:g} s)"
+                    )
         else:
             man = None if no_detect else "auto"
         sols = solve_many(contacts, sup, man, sigma=sigma, config=TMAConfig(sigma=sigma))
         result = {cid: solution_to_dict(s) for cid, s in sols.items()}
         text = json.dumps(result, indent=2)
         if out is not None:
-            out.write_text(text + "\n")
+            with atomic_write(out) as fh:
+                fh.write(text + "\n")
             for cid, s in sols.items():
                 L = s.last
                 if s.observable:
@@ -124,6 +134,7 @@ def register(app: typer.Typer) -> None:
         if plot is not None:
             from seatrack.tma.plot import plot_solutions
 
-            plot_solutions(contacts, sols, plot)
+            with atomic_path(plot, suffix=plot.suffix or ".png") as tmp:
+                plot_solutions(contacts, sols, tmp)
             if out is not None:
                 typer.echo(f"wrote {plot}")

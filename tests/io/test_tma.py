@@ -2,6 +2,7 @@
 
 import json
 import math
+import re
 import subprocess
 import sys
 
@@ -13,8 +14,8 @@ from typer.testing import CliRunner
 from seatrack.commands.tma import register
 from seatrack.geometry import bearing, bearing_rad_to_deg
 from seatrack.io.table import InputError
-from seatrack.tma import classic_scenario
-from seatrack.tma.io import read_bearings, read_support
+from seatrack.simulate.tma import classic_scenario
+from seatrack.io.tma import read_bearings, read_support
 
 SC = classic_scenario()
 HEADER = "contact,time_s,bearing_deg,observer_x_m,observer_y_m,sigma_deg\n"
@@ -59,16 +60,18 @@ def test_read_bearings_round_trip(tmp_path):
         ("1,0,10,0,0,1\n1,60,360,0,0,1\n", "line 3: bearing_deg = 360 is outside [0, 360)"),
         ("1,0,-1,0,0,1\n1,60,10,0,0,1\n", "line 2: bearing_deg = -1 is outside"),
         ("1,0,10,0,0,1\n", "line 2: contact '1' has a single bearing"),
-        ("1,0,10,0,0,1\n1,60,11,0,0,0\n", "line 3: sigma_deg = 0 must be positive"),
+        ("1,0,10,0,0,1\n1,60,11,0,0,0\n", "line 3: sigma_deg = 0 must be in (0, 180) degrees"),
+        ("1,0,10,0,0,1\n1,60,11,0,0,180\n", "line 3: sigma_deg = 180 must be in (0, 180)"),
+        ("1,0,10,0,0,1\n1,60,11,1e9,0,1\n", "line 3: observer_x_m = 1e+09 is implausible"),
+        ("1,0,10,0,0,1\n1,1e11,11,0,0,1\n", "line 3: time_s = 1e+11 is implausible"),
+        ("1,0,10,0,0,1\n1,60,inf,0,0,1\n", "line 3: column bearing_deg = 'inf' is not a finite"),
         ("1,0,10,0,0,1\n1,60,11,0,,1\n", "line 3: column observer_y_m is empty"),
     ],
 )
 def test_bad_bearings_name_the_row(tmp_path, body, message):
     p = tmp_path / "bad.csv"
     p.write_text(HEADER + body)
-    with pytest.raises(
-        InputError, match=message.replace("[", r"\[").replace("(", r"\(").replace(")", r"\)")
-    ):
+    with pytest.raises(InputError, match=re.escape(message)):
         read_bearings(p)
 
 
@@ -91,11 +94,19 @@ def test_support_file_validation(tmp_path):
     for row, msg in [
         ("A,bogus,1,1,1,,", "line 2: kind = 'bogus'"),
         ("A,range,1,100,5,,", "line 2: a range support value needs observer_x_m"),
-        ("A,speed,1,2,0,,", "line 2: sigma = 0 must be positive"),
+        ("A,speed,1,2,0,,", "line 2: sigma = 0 must be in (0, 1000] m/s"),
         ("A,course,1,400,5,,", "line 2: course value = 400 is outside"),
+        ("A,range,1,1e308,5,0,0", "line 2: range value = 1e+308 must be in (0, 1e+08] m"),
+        ("A,range,1,5000,1e300,0,0", "line 2: sigma = 1e+300 must be in (0, 1e+08] m"),
+        ("A,range,1,5000,50,1e12,0", "line 2: observer position (1e+12, 0) is implausible"),
+        ("A,speed,1,5000,1,,", "line 2: speed value = 5000 must be in (0, 1000] m/s"),
+        ("A,speed,1,-2,1,,", "line 2: speed value = -2 must be in"),
+        ("A,course,1,90,200,,", "line 2: sigma = 200 must be in (0, 180] deg"),
+        ("A,course,1e12,90,2,,", "line 2: time_s = 1e+12 is implausible"),
+        ("A,speed,1,nan,1,,", "line 2: column value = 'nan' is not a finite"),
     ]:
         p.write_text("contact,kind,time_s,value,sigma,observer_x_m,observer_y_m\n" + row + "\n")
-        with pytest.raises(InputError, match=msg):
+        with pytest.raises(InputError, match=re.escape(msg)):
             read_support(p)
 
 

@@ -1,21 +1,25 @@
-"""BEARINGS.csv / SUPPORT.csv validation, RESULT.json fields and the `seatrack tma` command."""
+"""seatrack.io.tma: BEARINGS.csv / SUPPORT.csv validation (file, line N), RESULT.json as
+valid JSON, the console summary."""
 
+import dataclasses
 import json
 import math
 import re
-import subprocess
-import sys
 
 import numpy as np
 import pytest
-import typer
-from typer.testing import CliRunner
 
-from seatrack.commands.tma import register
-from seatrack.geometry import bearing, bearing_rad_to_deg
+from seatrack.geometry import bearing_rad_to_deg
 from seatrack.io.table import InputError
+from seatrack.io.tma import (
+    read_bearings,
+    read_support,
+    result_json,
+    solution_summary,
+    solution_to_dict,
+)
 from seatrack.simulate.tma import classic_scenario
-from seatrack.io.tma import read_bearings, read_support
+from seatrack.tma import TMAConfig, solve
 
 SC = classic_scenario()
 HEADER = "contact,time_s,bearing_deg,observer_x_m,observer_y_m,sigma_deg\n"
@@ -30,17 +34,6 @@ def _write_bearings(path, contacts=("A",), rng_seed=0, no_turn=False):
             rows.append(f"{c},{t:g},{bearing_rad_to_deg(z):.4f},{o[0]:.2f},{o[1]:.2f},1.5\n")
     path.write_text("".join(rows))
     return path
-
-
-def _app():
-    app = typer.Typer()
-
-    @app.callback()
-    def main() -> None:  # a group, so the command is invoked by name
-        pass
-
-    register(app)
-    return app
 
 
 def test_read_bearings_round_trip(tmp_path):
@@ -110,71 +103,41 @@ def test_support_file_validation(tmp_path):
             read_support(p)
 
 
-def test_cli_writes_result_json_and_plot(tmp_path):
-    b = _write_bearings(tmp_path / "b.csv", ("A", "B"))
-    s = tmp_path / "s.csv"
-    o = SC.observer.pos[-1, :2]
-    s.write_text(
-        f"contact,kind,time_s,value,sigma,observer_x_m,observer_y_m\nB,range,1860,2500,100,{o[0]},{o[1]}\n"
-    )
-    out, png = tmp_path / "r.json", tmp_path / "r.png"
-    res = CliRunner().invoke(
-        _app(),
-        ["tma", str(b), "--support", str(s), "--no-detect", "--out", str(out), "--plot", str(png)],
-    )
-    assert res.exit_code == 0, res.output
-    data = json.loads(out.read_text())
-    assert set(data) == {"A", "B"}
-    a = data["A"]
-    keys = ["t0_s", "x_m", "y_m", "vx_mps", "vy_mps", "legs", "covariance", "last", "iterations"]
-    keys += ["converged", "observable", "condition_number", "residual_rms_deg"]
-    for key in keys:
-        assert key in a
-    assert a["observable"] and a["converged"] and len(a["legs"]) == 1
-    assert np.array(a["covariance"]).shape == (4, 4)
-    keys = ["time_s", "x_m", "y_m", "range_m", "bearing_deg", "course_deg", "speed_mps"]
-    keys += ["sigma_range_m", "sigma_bearing_deg", "sigma_course_deg", "sigma_speed_mps"]
-    for key in keys:
-        assert a["last"][key] is not None
-    assert abs(a["x_m"] - 4920) < 1500 and data["B"]["n_support"] == 1
-    assert png.stat().st_size > 10_000
+def _strict_json(text):
+    """json.loads that refuses NaN / Infinity (which Python's json would accept)."""
+
+    def refuse(name):
+        raise ValueError(f"not valid JSON: {name}")
+
+    return json.loads(text, parse_constant=refuse)
 
 
-def test_cli_unobservable_gives_nulls(tmp_path):
-    p = tmp_path / "b.csv"
-    rows = [HEADER] + [
-        f"1,{60 * i},{bearing_rad_to_deg(bearing(5000 - 180.0 * i, 2000.0)):.5f},{180.0 * i},0,1\n"
-        for i in range(20)
-    ]
-    p.write_text("".join(rows))
-    res = CliRunner().invoke(_app(), ["tma", str(p), "--no-detect"])
-    assert res.exit_code == 0, res.output
-    d = json.loads(res.stdout)["1"]
-    assert d["observable"] is False
-    assert d["last"]["range_m"] is None and d["last"]["sigma_range_m"] is None
-    assert d["x_m"] is None and d["covariance"] is None
+def test_result_json_is_always_valid_json():
+    b = SC.bearings(np.random.default_rng(1))
+    sol = solve(b, sigma=SC.sigma)
+    broken = dataclasses.replace(
+        sol, cost=math.inf, condition_number=math.nan, residual_rms=math.inf
+    )
+    doc = _strict_json(result_json({"A": sol, "B": broken}))
+    assert doc["A"]["cost"] == pytest.approx(sol.cost)
+    assert doc["B"]["cost"] is None and doc["B"]["condition_number"] is None
+    assert doc["B"]["residual_rms_deg"] is None
+    assert doc["A"]["iterations_total"] > doc["A"]["iterations"] >= 2
+
+
+def test_not_converged_and_unobservable_have_no_operator_numbers():
+    b = SC.bearings(np.random.default_rng(4))
+    far = np.array([0.0, 60_000.0, -10.0, 10.0])
+    s = solve(b, sigma=SC.sigma, initial=far, config=TMAConfig(max_iterations=2))
+    assert not s.converged
+    d = solution_to_dict(s)
+    assert d["converged"] is False and d["x_m"] is None and d["covariance"] is None
+    for key in ("range_m", "sigma_range_m", "course_deg", "speed_mps", "ellipse"):
+        assert d["last"][key] is None
     assert d["last"]["bearing_deg"] is not None
-    assert d["warnings"] and "not observable" in d["warnings"][0]
-
-
-def test_cli_manoeuvres_option_and_errors(tmp_path):
-    b = _write_bearings(tmp_path / "b.csv")
-    res = CliRunner().invoke(_app(), ["tma", str(b), "--manoeuvres", "900"])
-    assert res.exit_code == 0, res.output
-    d = json.loads(res.stdout)["A"]
-    assert [leg["start_s"] for leg in d["legs"]] == [0.0, 900.0] and not d["manoeuvres_detected"]
-    res = CliRunner().invoke(_app(), ["tma", str(b), "--manoeuvres", "9x0"])
-    assert isinstance(res.exception, InputError) and "9x0" in str(res.exception)
-
-
-def test_console_error_is_one_line_with_exit_status_2(tmp_path):
-    p = tmp_path / "bad.csv"
-    p.write_text(HEADER + "1,0,10,0,0,1\n1,60,400,0,0,1\n")
-    r = subprocess.run(
-        [sys.executable, "-m", "seatrack.cli", "tma", str(p)],
-        capture_output=True,
-        text=True,
-        timeout=120,
-    )
-    assert r.returncode == 2
-    assert r.stderr.startswith("error:") and "line 3" in r.stderr and "outside [0, 360)" in r.stderr
+    ok = solve(b, sigma=SC.sigma)
+    for bad in (s, dataclasses.replace(ok, converged=False)):
+        line = solution_summary("A", bad)
+        assert "NOT " in line and " m," not in line and "+/-" not in line
+    assert "NOT CONVERGED" in solution_summary("A", dataclasses.replace(ok, converged=False))
+    assert "+/-" in solution_summary("A", ok) and "iterations" in solution_summary("A", ok)

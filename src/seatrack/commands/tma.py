@@ -18,7 +18,7 @@ import typer
 from seatrack.io.table import InputError
 
 if TYPE_CHECKING:
-    from seatrack.tma import Bearings, TMASolution
+    from seatrack.tma import Bearings
 
 
 def _parse_times(text: str | None) -> list[float] | None:
@@ -60,24 +60,6 @@ def _check_manoeuvres(times: list[float], contacts: Mapping[str, Bearings]) -> N
             )
 
 
-def _summary(cid: str, s: TMASolution) -> str:
-    """One console line; operator numbers only for an observable, converged solution."""
-    if not s.observable:
-        return f"contact {cid}: NOT OBSERVABLE (no range, course or speed)"
-    if not s.converged:
-        return (
-            f"contact {cid}: NOT CONVERGED after {s.iterations} iterations "
-            "(no range, course or speed)"
-        )
-    L = s.last
-    return (
-        f"contact {cid}: range {L.range:.0f} +/- {L.sigma_range:.0f} m, "
-        f"bearing {math.degrees(L.bearing):.1f} deg, "
-        f"course {math.degrees(L.course):.1f} +/- {math.degrees(L.sigma_course):.1f} deg, "
-        f"speed {L.speed:.2f} +/- {L.sigma_speed:.2f} m/s ({s.iterations} iterations)"
-    )
-
-
 def register(app: typer.Typer) -> None:
     @app.command("tma")
     def tma(
@@ -113,7 +95,7 @@ def register(app: typer.Typer) -> None:
         """Bearings-only TMA (DE 3446658): position, course and speed of every contact with
         1-sigma / 95 % values, support values, multi-leg targets and an observability check."""
         from seatrack.io.atomic import atomic_write, check_output_path
-        from seatrack.io.tma import read_bearings, read_support, result_json
+        from seatrack.io.tma import read_bearings, read_support, result_json, solution_summary
         from seatrack.tma import TMAConfig, solve_many
 
         if not (math.isfinite(sigma_deg) and 0 < sigma_deg < 180):
@@ -145,7 +127,7 @@ def register(app: typer.Typer) -> None:
             with atomic_write(out) as fh:
                 fh.write(text)
             for cid, s in sols.items():
-                typer.echo(_summary(cid, s))
+                typer.echo(solution_summary(cid, s))
                 for w in s.warnings:
                     typer.echo(f"  warning: {w}")
             typer.echo(f"wrote {out}")

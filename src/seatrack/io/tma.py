@@ -45,6 +45,7 @@ __all__ = [
     "read_bearings",
     "read_support",
     "result_json",
+    "solution_summary",
     "solution_to_dict",
 ]
 
@@ -307,3 +308,22 @@ def solution_to_dict(sol: TMASolution) -> dict[str, Any]:
         "manoeuvres_detected": sol.manoeuvres_detected,
         "warnings": list(sol.warnings),
     }
+
+
+def solution_summary(cid: str, s: TMASolution) -> str:
+    """One console line of ``seatrack tma``; operator numbers (m, deg, m/s) only for an
+    observable, converged solution."""
+    if not s.observable:
+        return f"contact {cid}: NOT OBSERVABLE (no range, course or speed)"
+    if not s.converged:
+        return (
+            f"contact {cid}: NOT CONVERGED after {s.iterations} iterations "
+            "(no range, course or speed)"
+        )
+    L = s.last
+    return (
+        f"contact {cid}: range {L.range:.0f} +/- {L.sigma_range:.0f} m, "
+        f"bearing {math.degrees(L.bearing):.1f} deg, "
+        f"course {math.degrees(L.course):.1f} +/- {math.degrees(L.sigma_course):.1f} deg, "
+        f"speed {L.speed:.2f} +/- {L.sigma_speed:.2f} m/s ({s.iterations} iterations)"
+    )

@@ -117,3 +117,19 @@ def test_whitening_with_scalar_vector_and_matrix_weights():
         whiten(J, np.ones(5))
     with pytest.raises(ValueError, match="weight matrix"):
         whiten(J, np.zeros((6, 6)))
+
+
+def test_ill_conditioned_but_regular_jacobian_is_inverted_from_its_svd():
+    """Singular values 1 .. 1e-7 (full rank for the 1e-10 tolerance): the inverse comes from
+    the SVD of J itself and matches the exact one -- forming J^T J would square the
+    condition number (1e14) and lose most digits."""
+    rng = np.random.default_rng(3)
+    U, _ = np.linalg.qr(rng.standard_normal((6, 4)))
+    V, _ = np.linalg.qr(rng.standard_normal((4, 4)))
+    sv = np.array([1.0, 0.5, 0.2, 1e-7])
+    J = (U * sv) @ V.T
+    exact = (V / sv**2) @ V.T  # (J^T J)^-1 = V S^-2 V^T
+    for scale in (np.ones(4), UNITS):
+        P, chk = covariance_from_jacobian(J * scale)
+        assert chk.full_rank and chk.smallest < 1e-5 * chk.largest
+        np.testing.assert_allclose(P * np.outer(scale, scale), exact, rtol=1e-6)

@@ -16,20 +16,9 @@ from seatrack.commands.tma import register
 from seatrack.geometry import bearing, bearing_rad_to_deg
 from seatrack.io.table import InputError
 from seatrack.simulate.tma import classic_scenario
+from tma_samples import HEADER, write_bearings
 
 SC = classic_scenario()
-HEADER = "contact,time_s,bearing_deg,observer_x_m,observer_y_m,sigma_deg\n"
-
-
-def _write_bearings(path, contacts=("A",), rng_seed=0):
-    rng = np.random.default_rng(rng_seed)
-    rows = [HEADER]
-    for c in contacts:
-        b = SC.bearings(rng)
-        for t, z, o in zip(b.t, b.bearing, b.observer, strict=True):
-            rows.append(f"{c},{t:g},{bearing_rad_to_deg(z):.4f},{o[0]:.2f},{o[1]:.2f},1.5\n")
-    path.write_text("".join(rows))
-    return path
 
 
 def _app():
@@ -53,7 +42,7 @@ def _main(monkeypatch, capsys, *args):
 
 
 def test_cli_writes_result_json_and_plot(tmp_path):
-    b = _write_bearings(tmp_path / "b.csv", ("A", "B"))
+    b = write_bearings(tmp_path / "b.csv", ("A", "B"))
     s = tmp_path / "s.csv"
     o = SC.observer.pos[-1, :2]
     s.write_text(
@@ -100,7 +89,7 @@ def test_cli_unobservable_gives_nulls(tmp_path):
 
 
 def test_cli_manoeuvres_option_and_errors(tmp_path):
-    b = _write_bearings(tmp_path / "b.csv")
+    b = write_bearings(tmp_path / "b.csv")
     res = CliRunner().invoke(_app(), ["tma", str(b), "--manoeuvres", "900"])
     assert res.exit_code == 0, res.output
     d = json.loads(res.stdout)["A"]
@@ -135,14 +124,14 @@ def test_console_error_is_one_line_with_exit_status_2(tmp_path):
     ],
 )
 def test_options_are_validated(tmp_path, monkeypatch, capsys, option, value, message):
-    b = _write_bearings(tmp_path / "b.csv")
+    b = write_bearings(tmp_path / "b.csv")
     code, out, err = _main(monkeypatch, capsys, b, option, value)
     assert code == 2 and out == ""
     assert err.startswith("error: ") and message in err and len(err.strip().splitlines()) == 1
 
 
 def test_bad_output_paths_fail_before_any_work(tmp_path, monkeypatch, capsys):
-    b = _write_bearings(tmp_path / "b.csv")
+    b = write_bearings(tmp_path / "b.csv")
     (tmp_path / "adir").mkdir()
     (tmp_path / "afile").write_text("x")
     cases = [
@@ -164,7 +153,7 @@ def test_bad_output_paths_fail_before_any_work(tmp_path, monkeypatch, capsys):
 
 
 def test_failed_run_leaves_the_previous_result_intact(tmp_path, monkeypatch, capsys):
-    good = _write_bearings(tmp_path / "b.csv")
+    good = write_bearings(tmp_path / "b.csv")
     res = tmp_path / "r.json"
     code, out, _ = _main(monkeypatch, capsys, good, "--no-detect", "--out", res)
     assert code == 0 and "iterations" in out
@@ -179,7 +168,7 @@ def test_failed_run_leaves_the_previous_result_intact(tmp_path, monkeypatch, cap
 
 
 def test_stdout_result_is_strict_json_with_iteration_counts(tmp_path, monkeypatch, capsys):
-    b = _write_bearings(tmp_path / "b.csv")
+    b = write_bearings(tmp_path / "b.csv")
     code, out, _ = _main(monkeypatch, capsys, b)  # default: leg detection
 
     def refuse(name):

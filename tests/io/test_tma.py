@@ -9,7 +9,6 @@ import re
 import numpy as np
 import pytest
 
-from seatrack.geometry import bearing_rad_to_deg
 from seatrack.io.table import InputError
 from seatrack.io.tma import (
     read_bearings,
@@ -20,24 +19,13 @@ from seatrack.io.tma import (
 )
 from seatrack.simulate.tma import classic_scenario
 from seatrack.tma import TMAConfig, solve
+from tma_samples import HEADER, write_bearings
 
 SC = classic_scenario()
-HEADER = "contact,time_s,bearing_deg,observer_x_m,observer_y_m,sigma_deg\n"
-
-
-def _write_bearings(path, contacts=("A",), rng_seed=0, no_turn=False):
-    rng = np.random.default_rng(rng_seed)
-    rows = [HEADER]
-    for c in contacts:
-        b = SC.bearings(rng)
-        for t, z, o in zip(b.t, b.bearing, b.observer, strict=True):
-            rows.append(f"{c},{t:g},{bearing_rad_to_deg(z):.4f},{o[0]:.2f},{o[1]:.2f},1.5\n")
-    path.write_text("".join(rows))
-    return path
 
 
 def test_read_bearings_round_trip(tmp_path):
-    p = _write_bearings(tmp_path / "b.csv", ("A", "B"))
+    p = write_bearings(tmp_path / "b.csv", ("A", "B"))
     got = read_bearings(p)
     assert list(got) == ["A", "B"]
     assert len(got["A"]) == 32

@@ -9,7 +9,7 @@ import pytest
 from seatrack.geometry import bearing, knots_to_mps
 from seatrack.information import SingularMatrixError
 from seatrack.simulate import Leg, trajectory
-from seatrack.simulate.tma import TMAScenario, classic_scenario, scenario_from_trajectories
+from seatrack.simulate.tma import TMAScenario, classic_scenario
 from seatrack.tma import (
     Bearings,
     SupportValue,
@@ -19,28 +19,9 @@ from seatrack.tma import (
     solve,
     solve_many,
 )
+from tma_samples import random_geometry
 
 N_GEOMETRIES = 100
-
-
-def _random_geometry(rng):
-    """One own-ship turn of 40-140 deg, target 1-40 km away on any course at 1-12 m/s,
-    20-80 bearings every 10-60 s, bearing sigma 0.3-2 deg."""
-    n, dt = int(rng.integers(20, 80)), float(rng.uniform(10, 60))
-    T = n * dt
-    times = dt * np.arange(n)
-    turn = rng.choice([-1, 1]) * rng.uniform(math.radians(40), math.radians(140))
-    legs = [Leg.straight(rng.uniform(0.2, 0.6) * T), Leg.turn(turn, math.radians(1.0))]
-    obs = trajectory(
-        [0, 0], rng.uniform(0, 2 * np.pi), rng.uniform(2, 8), legs + [Leg.straight(2 * T)],
-        times=times,
-    )  # fmt: skip
-    r0, b0 = math.exp(rng.uniform(math.log(1000), math.log(40000))), rng.uniform(0, 2 * np.pi)
-    tgt = trajectory(
-        [r0 * math.sin(b0), r0 * math.cos(b0)], rng.uniform(0, 2 * np.pi), rng.uniform(1, 12),
-        [Leg.straight(2 * T)], times=times,
-    )  # fmt: skip
-    return scenario_from_trajectories(tgt, obs, math.radians(rng.uniform(0.3, 2)))
 
 
 def _crb_relative_range_sigma(sc):
@@ -53,7 +34,7 @@ def _crb_relative_range_sigma(sc):
 @pytest.fixture(scope="module")
 def random_runs():
     rng = np.random.default_rng(2024)
-    scs = [_random_geometry(rng) for _ in range(N_GEOMETRIES)]
+    scs = [random_geometry(rng) for _ in range(N_GEOMETRIES)]
     contacts = {str(i): sc.bearings(rng) for i, sc in enumerate(scs)}
     support = {}
     for i, sc in enumerate(scs):  # range at the last bearing, sigma 5 % of it

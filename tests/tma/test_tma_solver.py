@@ -9,7 +9,7 @@ import pytest
 from seatrack.evaluate.metrics import anees, chi2_interval
 from seatrack.geometry import bearing, knots_to_mps
 from seatrack.simulate import Leg, trajectory
-from seatrack.simulate.tma import TMAScenario, classic_scenario, scenario_from_trajectories
+from seatrack.simulate.tma import TMAScenario, classic_scenario
 from seatrack.tma import (
     Bearings,
     SupportValue,
@@ -22,6 +22,7 @@ from seatrack.tma import (
 from seatrack.tma.legs import leg_starts
 from seatrack.tma.lm import levenberg_marquardt
 from seatrack.tma.problem import Problem
+from tma_samples import random_geometry
 
 SC = classic_scenario()
 
@@ -275,21 +276,7 @@ def test_automatic_start_finds_the_global_minimum_on_random_geometries():
     rng = np.random.default_rng(0)
     n_good = 0
     for _ in range(40):
-        n, dt = int(rng.integers(20, 80)), float(rng.uniform(10, 60))
-        T = n * dt
-        times = dt * np.arange(n)
-        turn = rng.choice([-1, 1]) * rng.uniform(math.radians(40), math.radians(140))
-        legs = [Leg.straight(rng.uniform(0.2, 0.6) * T), Leg.turn(turn, math.radians(1.0))]
-        obs = trajectory(
-            [0, 0], rng.uniform(0, 2 * np.pi), rng.uniform(2, 8), legs + [Leg.straight(2 * T)],
-            times=times,
-        )  # fmt: skip
-        r0, b0 = math.exp(rng.uniform(math.log(1000), math.log(40000))), rng.uniform(0, 2 * np.pi)
-        tgt = trajectory(
-            [r0 * math.sin(b0), r0 * math.cos(b0)], rng.uniform(0, 2 * np.pi), rng.uniform(1, 12),
-            [Leg.straight(2 * T)], times=times,
-        )  # fmt: skip
-        sc = scenario_from_trajectories(tgt, obs, math.radians(rng.uniform(0.3, 2)))
+        sc = random_geometry(rng)
         b = sc.bearings(rng)
         auto = solve(b, sigma=sc.sigma)
         ref = solve(b, sigma=sc.sigma, initial=sc.state)

@@ -258,7 +258,7 @@ def _scaled_factor(Jw: FloatArray, rtol: float) -> tuple[FloatArray | None, Rank
             Linv = np.linalg.inv(np.linalg.cholesky(G))  # G^-1 = Linv^T Linv
             return Linv.T * inv[:, None], chk
     if m > 2 * n:
-        Js = np.linalg.qr(Js, mode="r")
+        Js = np.asarray(np.linalg.qr(Js, mode="r"), dtype=np.float64)
     _, s, Vt = np.linalg.svd(Js, full_matrices=False)
     smax = float(s[0]) if s.size else 0.0
     rank = min(int(np.sum(s > rtol * smax)) if smax > 0 else 0, int(np.sum(c > 0)))

@@ -55,6 +55,7 @@ __all__ = [
     "information_rtol",
     "invert_information",
     "invert_jacobian_information",
+    "positive_definite_mask",
     "scale_to_unit_diagonal",
     "whiten",
 ]
@@ -163,6 +164,25 @@ def check_information(A: ArrayLike, rtol: float | None = None) -> RankCheck:
     rank = min(rank, int(np.sum(d > 0)))
     smallest = math.sqrt(max(float(lam[0]), 0.0)) if np.all(d > 0) else 0.0
     return RankCheck(rank, n, smallest, math.sqrt(max(lmax, 0.0)), math.sqrt(tol))
+
+
+def positive_definite_mask(M: ArrayLike, rtol: float | None = None) -> NDArray[np.bool_]:
+    """Batched scaled test: which of the symmetric matrices ``M (..., n, n)`` are positive
+    definite to working precision (positive diagonal, smallest eigenvalue of the unit-diagonal
+    matrix above ``rtol`` times its largest; default :func:`information_rtol`).
+
+    Non-finite matrices are reported as not positive definite."""
+    A = np.asarray(M, dtype=np.float64)
+    n = A.shape[-1]
+    tol = information_rtol(n) if rtol is None else float(rtol)
+    finite = np.all(np.isfinite(A), axis=(-2, -1))
+    A = np.where(finite[..., None, None], A, np.eye(n))
+    diag = np.diagonal(A, axis1=-2, axis2=-1)
+    pos = np.all(diag > 0, axis=-1)
+    d = 1.0 / np.sqrt(np.where(diag > 0, diag, 1.0))
+    As = A * d[..., :, None] * d[..., None, :]
+    lam = np.linalg.eigvalsh(0.5 * (As + np.swapaxes(As, -1, -2)))
+    return np.asarray(finite & pos & (lam[..., 0] > tol * lam[..., -1]))
 
 
 def invert_information(

@@ -55,15 +55,16 @@ def _damped_step(A: FloatArray, g: FloatArray, lam: FloatArray) -> FloatArray:
     D = A[:, diag, diag]
     D = np.maximum(D, 1e-12 * D.max(axis=1, keepdims=True) + _TINY)
     s = 1.0 / np.sqrt(D)
-    As = A * s[:, :, None] * s[:, None, :]
+    As = A * (s[:, :, None] * s[:, None, :])
     As[:, diag, diag] += lam[:, None]
-    bad = ~np.all(np.isfinite(As.reshape(As.shape[0], -1)), axis=1) | ~np.all(
-        np.isfinite(g), axis=1
-    )
-    if bad.any():  # non-finite entries (a start at infinity): a zero step, then rejected
+    rhs = s * g
+    if not (np.isfinite(As).all() and np.isfinite(rhs).all()):
+        # non-finite entries (a start at infinity): a zero step, which is then rejected
+        bad = ~np.all(np.isfinite(As.reshape(As.shape[0], -1)), axis=1)
+        bad |= ~np.all(np.isfinite(rhs), axis=1)
         As[bad] = np.eye(n)
-        g = np.where(bad[:, None], 0.0, g)
-    y = np.linalg.solve(As, (s * g)[..., None])[..., 0]
+        rhs[bad] = 0.0
+    y = np.linalg.solve(As, rhs[..., None])[..., 0]
     return np.asarray(s * y, dtype=float)
 
 

@@ -9,6 +9,8 @@ import sys
 import numpy as np
 import pytest
 import typer
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from seatrack import cli
@@ -177,3 +179,68 @@ def test_stdout_result_is_strict_json_with_iteration_counts(tmp_path, monkeypatc
     d = json.loads(out, parse_constant=refuse)["A"]
     assert code == 0 and d["converged"] and d["observable"]
     assert d["iterations_total"] > d["iterations"] >= 2
+
+
+_CELLS = ["", "nan", "inf", "-inf", "1e308", "-1e308", "abc", "0", "-1", "360", "1e11", "5"]
+
+
+@settings(
+    max_examples=60, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    edits=st.lists(
+        st.tuples(st.integers(1, 12), st.integers(0, 5), st.sampled_from(_CELLS)),
+        min_size=1,
+        max_size=3,
+    )
+)
+def test_mutated_bearings_exit_0_or_2_never_a_traceback(tmp_path, monkeypatch, capsys, edits):
+    """Property: a BEARINGS.csv with hostile cells either solves (strict JSON out) or stops
+    with one `error: FILE, line N: ...` line and exit status 2."""
+    rows = write_bearings(tmp_path / "ok.csv").read_text().splitlines()[:13]
+    cells = [r.split(",") for r in rows]
+    for line, col, value in edits:
+        cells[line][col] = value
+    p = tmp_path / "mut.csv"
+    p.write_text("\n".join(",".join(c) for c in cells) + "\n")
+    code, out, err = _main(monkeypatch, capsys, p, "--no-detect")
+    assert code in (0, 2)
+    if code == 0:
+        json.loads(out, parse_constant=lambda name: pytest.fail(f"{name} in JSON"))
+    else:
+        assert err.startswith(f"error: {p}") and len(err.strip().splitlines()) == 1
+
+
+_SUPPORT = (
+    "contact,kind,time_s,value,sigma,observer_x_m,observer_y_m\n"
+    "A,range,1860,2500,100,0,0\nA,speed,600,2.0,0.2,,\nA,course,900,220,5,,\n"
+)
+
+
+@settings(
+    max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+)
+@given(
+    edits=st.lists(
+        st.tuples(
+            st.integers(1, 3),
+            st.integers(0, 6),
+            st.sampled_from(_CELLS + ["range", "speed", "course", "bogus", "B"]),
+        ),
+        min_size=1,
+        max_size=2,
+    )
+)
+def test_mutated_support_exit_0_or_2_never_a_traceback(tmp_path, monkeypatch, capsys, edits):
+    b = write_bearings(tmp_path / "b.csv")
+    cells = [r.split(",") for r in _SUPPORT.splitlines()]
+    for line, col, value in edits:
+        cells[line][col] = value
+    s = tmp_path / "s.csv"
+    s.write_text("\n".join(",".join(c) for c in cells) + "\n")
+    code, out, err = _main(monkeypatch, capsys, b, "--support", s, "--no-detect")
+    assert code in (0, 2)
+    if code == 0:
+        json.loads(out, parse_constant=lambda name: pytest.fail(f"{name} in JSON"))
+    else:
+        assert err.startswith(f"error: {s}") and len(err.strip().splitlines()) == 1

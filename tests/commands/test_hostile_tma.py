@@ -17,7 +17,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from seatrack.geometry import bearing_rad_to_deg
-from seatrack.tma import classic_scenario
+from seatrack.simulate.tma import classic_scenario
 
 HEADER = "contact,time_s,bearing_deg,observer_x_m,observer_y_m,sigma_deg"
 SUPPORT = (

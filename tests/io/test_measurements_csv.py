@@ -132,7 +132,7 @@ def test_clutter_file(tmp_path):
 
 
 def test_bearings_file_is_read_by_the_tma_reader(tmp_path):
-    from seatrack.tma.io import read_bearings
+    from seatrack.io.tma import read_bearings
 
     own = trajectory([0.0, 0.0], np.radians(140), 2.5, [Leg.straight(30)], dt=1.0)
     _, m = _meas(("azimuth",), (np.radians(1.5),), observer=own, p_detect=0.9)

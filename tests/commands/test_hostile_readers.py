@@ -20,11 +20,11 @@ from seatrack.io.ais import read_ais
 from seatrack.io.measurements_csv import read_truth, write_truth
 from seatrack.io.plots import read_plots
 from seatrack.io.table import InputError
+from seatrack.io.tma import read_bearings, read_support
 from seatrack.navigation.files import read_echoes, read_gyro
 from seatrack.navigation.landmarks import read_map_csv
 from seatrack.simulate.scenarios import load_scenario
 from seatrack.simulate.trajectories import Leg, trajectory
-from seatrack.tma.io import read_bearings, read_support
 
 
 @pytest.fixture(scope="module")

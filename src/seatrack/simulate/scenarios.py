@@ -72,6 +72,7 @@ from numpy.typing import NDArray
 
 from seatrack.geometry import KNOT_MPS, geodetic_to_enu
 from seatrack.io.table import InputError
+from seatrack.simulate.multitarget import TargetPopulation, parse_multitarget
 from seatrack.simulate.sensors import Measurements, NoiseModel, observe, uniform_clutter
 from seatrack.simulate.trajectories import Leg, Trajectory, trajectory
 
@@ -229,6 +230,7 @@ class Scenario:
     description: str = ""
     path: str = ""
     extra: Mapping[str, Any] = field(default_factory=dict)
+    multitarget: TargetPopulation | None = None  # generated targets (simulate.multitarget)
 
     @property
     def target_names(self) -> list[str]:
@@ -409,6 +411,7 @@ _TOP_KEYS = (
     "targets",
     "sensors",
     "evaluate",
+    "multitarget",
 )
 _PLATFORM_KEYS = (
     "name",
@@ -735,7 +738,11 @@ def parse_scenario(doc: Mapping[str, Any], path: str = "<scenario>") -> Scenario
         extra = dict(r.table(doc["evaluate"], "evaluate"))
         for k, v in extra.items():
             r.table(v, f"evaluate.{k}")  # one table of method parameters per method
-    return Scenario(name, duration, dt, own, targets, sensors, seed, runs, description, path, extra)
+    mt = doc.get("multitarget")
+    population = None if mt is None else parse_multitarget(r.table(mt, "multitarget"), path)
+    return Scenario(
+        name, duration, dt, own, targets, sensors, seed, runs, description, path, extra, population
+    )
 
 
 def load_scenario(path: str | Path) -> Scenario:

@@ -1,8 +1,10 @@
 """Two-point initiation with a speed gate, and M-of-N confirmation."""
 
 import numpy as np
+import pytest
 
-from seatrack.tracking.initiation import confirmed, hopeless, speed_gate_pairs
+from seatrack.filters.base import Plots, SensorNoise, plot_gaussian
+from seatrack.tracking.initiation import confirmed, hopeless, polar_covariance, speed_gate_pairs
 
 
 def _cov(n, s=20.0):
@@ -44,3 +46,15 @@ def test_m_of_n():
     assert hopeless(hits, age, 3, 4).tolist() == [False, False, False, True, True, True]
     # M = 2: confirmed at birth (two initiating plots)
     assert confirmed(np.array([2]), np.array([2]), 2, 3).tolist() == [True]
+
+
+@pytest.mark.parametrize("three_d", [False, True])
+def test_polar_covariance_equals_the_plot_gaussian(three_d):
+    rng = np.random.default_rng(5)
+    n = 20
+    p = Plots(np.zeros(n), rng.uniform(500, 30000, n), rng.uniform(0, 2 * np.pi, n),
+              rng.uniform(-0.3, 0.6, n) if three_d else None)  # fmt: skip
+    sn = SensorNoise(sigma_range=12.0, sigma_azimuth=0.004, sigma_elevation=0.007)
+    d = 3 if three_d else 2
+    want = plot_gaussian(p, sn, 1.0)[1][:, :d, :d]
+    assert np.allclose(polar_covariance(p, sn), want, rtol=1e-9, atol=1e-9)

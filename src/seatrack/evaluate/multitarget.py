@@ -4,7 +4,7 @@ GOSPA (Rahmathullah, Garcia-Fernandez & Svensson, "Generalized optimal sub-patte
 assignment metric", FUSION 2017) with ``alpha = 2``, cut-off ``c`` and order ``p``, between
 the true set ``X`` (``n`` targets) and the estimated set ``Y`` (``m`` tracks)::
 
-    d(X, Y) = ( min_gamma  sum_{(i,j) in gamma} d(x_i, y_j)^p  +  c^p / 2 (n + m - 2 |gamma|) )^(1/p)
+    d(X, Y) = ( min_gamma sum_{(i,j) in gamma} d(x_i, y_j)^p + c^p/2 (n + m - 2|gamma|) )^(1/p)
 
 over partial assignments ``gamma`` of pairs with ``d(x_i, y_j) < c`` (paper, Proposition 1).
 Every truth left out is a *missed* target and every estimate left out a *false* one, each

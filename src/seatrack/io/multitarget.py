@@ -236,8 +236,8 @@ def write_unlabelled_plots(path: str | Path, plots: Plots) -> int:
 def write_plot_labels(path: str | Path, plots: Plots, labels: NDArray[np.int64]) -> int:
     """Write every plot with its input line and its track id (or ``clutter``)."""
     order = np.argsort(plots.line, kind="stable")
-    cols = [plots.line.astype(str), np.char.mod("%.6f", plots.t),
-            np.char.mod("%.6f", plots.range), np.char.mod("%.6f", np.degrees(plots.azimuth))]  # fmt: skip
+    num = lambda a: np.char.mod("%.6f", a)  # noqa: E731
+    cols = [plots.line.astype(str), num(plots.t), num(plots.range), num(np.degrees(plots.azimuth))]
     head = ["line", "time_s", "range_m", "azimuth_deg"]
     if plots.elevation is not None:
         cols.append(np.char.mod("%.6f", np.degrees(plots.elevation)))

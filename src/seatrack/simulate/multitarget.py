@@ -37,7 +37,7 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from seatrack.config import ConfigError, param, parse_config
+from seatrack.config import ConfigError, param, parse_config, to_edge
 from seatrack.filters.base import Plots
 from seatrack.io.table import InputError
 from seatrack.simulate.sensors import NoiseModel, observe, uniform_clutter
@@ -90,12 +90,15 @@ class TargetPopulation:
     crossings: int = param(2, doc="pairs of targets crossing each other", min=0)
 
     def __post_init__(self) -> None:
-        for name in ("range_limits", "speed_limits", "turn_rate_limits", "turn_angle_limits"):
-            lo_hi = getattr(self, name)
+        edge = to_edge(self)
+        for key in ("range_m", "speed_kn", "turn_rate_dps", "turn_angle_deg"):
+            lo_hi = edge[key]
             if len(lo_hi) != 2 or not 0 <= lo_hi[0] <= lo_hi[1]:
-                raise ValueError(f"{name}: expected [min, max] with 0 <= min <= max, got {lo_hi}")
+                raise ValueError(
+                    f"{key}: expected [min, max] with 0 <= min <= max, got {list(lo_hi)}"
+                )
         if self.range_limits[1] <= self.range_limits[0]:
-            raise ValueError(f"range_m: max must exceed min, got {self.range_limits}")
+            raise ValueError(f"range_m: max must exceed min, got {list(edge['range_m'])}")
 
 
 def parse_multitarget(table: Mapping[str, Any], path: str = "<scenario>") -> TargetPopulation:

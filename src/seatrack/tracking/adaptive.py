@@ -50,12 +50,17 @@ def _zip_stack(states: Sequence[TrackState]) -> TrackState:
     for k, v in first.aux.items():
         parts = [s.aux[k] for s in states]
         aux[k] = _zip_stack(parts) if isinstance(v, TrackState) else np.stack(parts, axis=1)
-    fields = ("t", "x", "P", "nis", "log_likelihood", "status")
-    return TrackState(*(np.stack([getattr(s, f) for s in states], axis=1) for f in fields), aux)
+    st = lambda f: np.stack([getattr(s, f) for s in states], axis=1)  # noqa: E731
+    return TrackState(st("t"), st("x"), st("P"), st("nis"), st("log_likelihood"), st("status"), aux)
 
 
-def _model(stacked: TrackState, j: int) -> TrackState:
-    return stacked.map(lambda a: a[:, j])
+def _flat(stacked: TrackState) -> TrackState:
+    """``(B, M, ...)`` model states as one batch of ``B * M`` (track-major)."""
+    return stacked.map(lambda a: a.reshape((-1,) + a.shape[2:]))
+
+
+def _unflat(flat: TrackState, B: int, M: int) -> TrackState:
+    return flat.map(lambda a: a.reshape((B, M) + a.shape[1:]))
 
 
 class NoiseLevels:
@@ -116,6 +121,7 @@ class NoiseLevels:
 
     def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
         models, mu = self._parts(state)
+        B, M = mu.shape
         c = mu @ self.transition  # (B, M) predicted model probabilities
         mix = mu[:, :, None] * self.transition[None] / np.maximum(c[:, None, :], 1e-300)
         x0 = np.einsum("bij,bik->bjk", mix, models.x)
@@ -123,32 +129,32 @@ class NoiseLevels:
         P0 = np.einsum(
             "bij,bijkl->bjkl", mix, models.P[:, :, None] + dx[..., :, None] * dx[..., None, :]
         )
+        # all models of all tracks in one call of the filter: a batch of B * M states
+        tt = np.repeat(np.broadcast_to(np.asarray(t, dtype=float), (B,)), M)
+        flat = _flat(models.replace(x=x0, P=P0))
+        s = self.flt.predict(flat, tt)
+        extra = np.tile(self.extra, B)
+        P = s.P.copy()
         d2 = 2 * self.d
-        out = []
-        for j in range(self.extra.size):
-            mj = _model(models, j).replace(x=x0[:, j], P=P0[:, j])
-            sj = self.flt.predict(mj, t)
-            if self.extra[j] > 0:
-                P = sj.P.copy()
-                P[:, :d2, :d2] += cv_noise(sj.t - mj.t, self.extra[j], self.d)
-                sj = sj.replace(P=P)
-            out.append(sj)
-        return self._outer(_zip_stack(out), c)
+        P[:, :d2, :d2] += cv_noise(s.t - flat.t, extra, self.d)
+        return self._outer(_unflat(s.replace(P=P), B, M), c)
 
     def update(self, state: TrackState, plots: Plots) -> TrackState:
         models, c = self._parts(state)
-        out = [self.flt.update(_model(models, j), plots) for j in range(self.extra.size)]
-        new = _zip_stack(out)
+        B, M = c.shape
+        new = _unflat(self.flt.update(_flat(models), plots.take(np.repeat(np.arange(B), M))), B, M)
         ok = new.status == PlotStatus.UPDATED  # (B, M)
         ll = np.where(ok, new.log_likelihood, -np.inf)
         any_ok = ok.any(axis=1)
         top = np.max(ll, axis=1, keepdims=True)
-        w = c * np.exp(ll - np.where(np.isfinite(top), top, 0.0))
-        mu = np.where(any_ok[:, None], w / np.maximum(w.sum(1, keepdims=True), 1e-300), c)
+        top = np.where(np.isfinite(top), top, 0.0)
+        w = c * np.exp(ll - top)
+        tot = w.sum(1, keepdims=True)
+        mu = np.where(any_ok[:, None], w / np.maximum(tot, 1e-300), c)
         status = np.where(any_ok, PlotStatus.UPDATED, PlotStatus.REJECTED).astype(np.int8)
         outer = self._outer(new, mu, status)
         with np.errstate(divide="ignore"):
-            mix_ll = np.where(any_ok, top[:, 0] + np.log((c * np.exp(ll - top)).sum(1)), np.nan)
+            mix_ll = np.where(any_ok, top[:, 0] + np.log(tot[:, 0]), np.nan)
         return outer.replace(log_likelihood=mix_ll)
 
     def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:

@@ -25,6 +25,7 @@ of that space -- the space the clutter density is estimated in.
 from __future__ import annotations
 
 import functools
+import itertools
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,7 +38,15 @@ from seatrack.filters.base import Plots, RecursiveFilter, SensorNoise, TrackStat
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-__all__ = ["Candidates", "gate_threshold", "pregate_radius", "pregate", "gate", "nis_logpdf"]
+__all__ = [
+    "Candidates",
+    "gate_threshold",
+    "pregate_radius",
+    "pregate",
+    "ball_pairs",
+    "gate",
+    "nis_logpdf",
+]
 
 _LOG_2PI = float(np.log(2 * np.pi))
 #: pre-gate radius = MARGIN * sqrt(gamma * bound) + SLACK (m): linearisation allowance
@@ -116,10 +125,16 @@ def pregate(
     if len(track_pos) == 0 or len(plot_pos) == 0:
         e = np.zeros(0, np.int64)
         return e, e.copy()
-    near = cKDTree(plot_pos).query_ball_point(track_pos, radius, return_sorted=False)
-    counts = np.fromiter(map(len, near), np.int64, len(near))
-    plot = np.fromiter((j for lst in near for j in lst), np.int64, int(counts.sum()))
+    counts, plot = ball_pairs(cKDTree(plot_pos), track_pos, radius)
     return np.repeat(np.arange(len(track_pos), dtype=np.int64), counts), plot
+
+
+def ball_pairs(tree: cKDTree, centres: FloatArray, radius: FloatArray) -> tuple[IntArray, IntArray]:
+    """Points of ``tree`` within ``radius`` of each centre: counts per centre and the
+    concatenated point indices (centre order)."""
+    near = tree.query_ball_point(centres, radius, return_sorted=False).tolist()
+    counts = np.fromiter(map(len, near), np.int64, len(near))
+    return counts, np.fromiter(itertools.chain.from_iterable(near), np.int64, int(counts.sum()))
 
 
 def gate(

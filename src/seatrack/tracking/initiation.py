@@ -39,13 +39,20 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 
+from seatrack.filters.base import Plots, SensorNoise
 from seatrack.tracking.association import gnn
-from seatrack.tracking.gating import MARGIN, SLACK, gate_threshold
+from seatrack.tracking.gating import MARGIN, SLACK, ball_pairs, gate_threshold
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-__all__ = ["InitPairs", "speed_gate_pairs", "confirmed", "hopeless"]
+__all__ = [
+    "InitPairs",
+    "polar_covariance",
+    "speed_gate_pairs",
+    "confirmed",
+    "hopeless",
+]
 
 _PAIR_BONUS = 1e6  # gain of any gated pair: more pairs first, then the likelier ones
 
@@ -101,9 +108,7 @@ def speed_gate_pairs(
         raise ValueError("speed gate: the earlier plots must be earlier than this scan")
     reach = max_speed * float(dt1.max())
     radius = reach + MARGIN * np.sqrt(2 * gamma) * _noise_radius(p2, C2, sensor_pos, reach)
-    near = cKDTree(p1).query_ball_point(p2, radius + SLACK, return_sorted=False)
-    counts = np.fromiter(map(len, near), np.int64, len(near))
-    i = np.fromiter((k for lst in near for k in lst), np.int64, int(counts.sum()))
+    counts, i = ball_pairs(cKDTree(p1), p2, radius + SLACK)
     j = np.repeat(np.arange(len(p2), dtype=np.int64), counts)
     if i.size == 0:
         return InitPairs(e, e.copy())
@@ -120,6 +125,35 @@ def speed_gate_pairs(
     chosen = gnn(j, i, _PAIR_BONUS - cost, len(p2), len(p1))
     second = np.flatnonzero(chosen >= 0)
     return InitPairs(chosen[second], second.astype(np.int64))
+
+
+def polar_covariance(plots: Plots, sensor: SensorNoise) -> FloatArray:
+    """Cartesian covariance ``(N, d, d)`` of plot positions: the linearised polar noise in
+    closed form, ``sigma_r^2 u u^T + (r cos(el) sigma_az)^2 a a^T [+ (r sigma_el)^2 e e^T]``
+    with ``u``, ``a``, ``e`` the unit vectors along range, azimuth and elevation (equal to
+    the covariance of :func:`seatrack.filters.base.plot_gaussian`, without its matrix
+    inverses)."""
+    az = plots.azimuth
+    sa, ca = np.sin(az), np.cos(az)
+    r = plots.range
+    if plots.elevation is None:
+        u = np.stack([sa, ca], -1)
+        a = np.stack([ca, -sa], -1)
+        return np.asarray(
+            sensor.sigma_range**2 * u[:, :, None] * u[:, None, :]
+            + ((r * sensor.sigma_azimuth) ** 2)[:, None, None] * a[:, :, None] * a[:, None, :]
+        )
+    el = plots.elevation
+    se, ce = np.sin(el), np.cos(el)
+    u = np.stack([ce * sa, ce * ca, se], -1)
+    a = np.stack([ca, -sa, np.zeros_like(sa)], -1)
+    e = np.stack([-se * sa, -se * ca, ce], -1)
+    outer = lambda v: v[:, :, None] * v[:, None, :]  # noqa: E731
+    return np.asarray(
+        sensor.sigma_range**2 * outer(u)
+        + ((r * ce * sensor.sigma_azimuth) ** 2)[:, None, None] * outer(a)
+        + ((r * sensor.sigma_elevation) ** 2)[:, None, None] * outer(e)
+    )
 
 
 def _mahalanobis(v: FloatArray, C: FloatArray) -> FloatArray:

@@ -3,8 +3,8 @@
 Plan view in kilometres (x East, y North): every plot as a dot -- grey when no confirmed
 track took it (clutter), in its track's colour otherwise -- confirmed tracks as coloured
 lines outlined in black (coasting scans circled), tentative tracks as thin dashed lines,
-truth (when given) as thin black dashed lines. With a GOSPA series a second panel shows GOSPA and its
-localisation / missed / false parts against time.
+truth (when given) as thin black dashed lines. With a GOSPA series a second panel shows
+GOSPA and its localisation / missed / false parts against time.
 """
 
 from __future__ import annotations

@@ -48,7 +48,12 @@ from seatrack.tracking.association import gnn, jpda
 from seatrack.tracking.clutter import ClutterRate, DetectionRate, SurveillanceRegion
 from seatrack.tracking.deletion import position_std, to_delete
 from seatrack.tracking.gating import Candidates, gate
-from seatrack.tracking.initiation import confirmed, hopeless, speed_gate_pairs
+from seatrack.tracking.initiation import (
+    confirmed,
+    hopeless,
+    polar_covariance,
+    speed_gate_pairs,
+)
 from seatrack.tracking.merge import merge_hypotheses
 
 FloatArray = NDArray[np.float64]
@@ -172,6 +177,8 @@ class TrackerRun:
     scan_times : (K,) s
     seconds_per_scan : (K,) wall time of each step
     clutter_per_scan : (K,) the clutter rate used at each scan
+    confirmed_ids : ids of every track that was confirmed at some scan
+    cpu_seconds_per_scan : (K,) processor time of each step (this process)
     """
 
     t: FloatArray
@@ -184,6 +191,7 @@ class TrackerRun:
     seconds_per_scan: FloatArray
     clutter_per_scan: FloatArray
     confirmed_ids: IntArray = field(default_factory=lambda: np.zeros(0, np.int64))
+    cpu_seconds_per_scan: FloatArray = field(default_factory=lambda: np.zeros(0))
 
 
 @dataclass
@@ -298,7 +306,7 @@ class MultiTargetTracker:
         seq = self.n_seen + keep
         self.n_seen += len(plots)
         self.n_scans += 1
-        sub = plots.take(keep)
+        sub = plots if keep.size == len(plots) else plots.take(keep)
         self.region.update(sub)
         state, status, best, plot_track, started_from, deleted = self._scan(sub, seq, t)
         self.state = state
@@ -321,9 +329,7 @@ class MultiTargetTracker:
         self, plots: Plots, seq: IntArray, t: float
     ) -> tuple[TrackState | None, NDArray[np.int8], IntArray, IntArray, IntArray, IntArray]:
         """Existing tracks, then initiation, on the scan's usable plots."""
-        x0, P0 = plot_gaussian(plots, self.sensor, 1.0, range_rate=False)
-        d = plots.d
-        pos, cov = x0[:, :d], P0[:, :d, :d]
+        pos = plots.positions()
         used = np.full(len(plots), -1, np.int64)  # batch index of the track using the plot
         deleted = np.zeros(0, np.int64)
         state: TrackState | None = None
@@ -333,7 +339,7 @@ class MultiTargetTracker:
         plot_track = np.full(len(plots), -1, np.int64)
         plot_track[used >= 0] = self.tracks.id[used[used >= 0]]
         started_from = np.zeros((2, 0), np.int64)
-        started = self._initiate(plots, pos, cov, seq, used, t) if len(plots) else None
+        started = self._initiate(plots, pos, seq, used, t) if len(plots) else None
         if started is not None:
             new_state, first, second, ids = started
             plot_track[second] = ids
@@ -384,6 +390,8 @@ class MultiTargetTracker:
         status = self._bookkeeping(hit)
         keep = self._survivors(new, plots.d)
         deleted = self.tracks.id[~keep]
+        if deleted.size == 0:
+            return new, used, status, best, deleted
         remap = np.cumsum(keep) - 1
         u = np.maximum(used, 0)
         used = np.where((used >= 0) & keep[u], remap[u], -1)
@@ -484,13 +492,7 @@ class MultiTargetTracker:
 
     # -- initiation -------------------------------------------------------------------
     def _initiate(
-        self,
-        plots: Plots,
-        pos: FloatArray,
-        cov: FloatArray,
-        seq: IntArray,
-        used: IntArray,
-        t: float,
+        self, plots: Plots, pos: FloatArray, seq: IntArray, used: IntArray, t: float
     ) -> tuple[TrackState, IntArray, IntArray, IntArray] | None:
         """Pair free plots of the last ``init_scans`` scans with this scan's free plots
         (speed gate); start a tentative track from each pair; the rest wait."""
@@ -498,6 +500,9 @@ class MultiTargetTracker:
         free = np.flatnonzero(used < 0)
         prev, self.pending = self.pending, None
         out = None
+        cov = np.zeros((len(plots), plots.d, plots.d))
+        if free.size:  # Cartesian covariances of the free plots only
+            cov[free] = polar_covariance(plots.take(free), self.sensor)
         if prev is not None and free.size:
             pairs = speed_gate_pairs(
                 prev.pos, prev.cov, prev.plots.t, pos[free], cov[free], t, cfg.max_speed,
@@ -567,12 +572,13 @@ def run_tracker(tracker: MultiTargetTracker, plots: Plots, all_tracks: bool = Fa
     cols: list[dict[str, NDArray[Any]]] = []
     confirmed_ids: list[IntArray] = []
     seq_track = np.full(order.size, -1, np.int64)  # by sequence number = position in order
-    secs, clutter = np.zeros(times.size), np.zeros(times.size)
+    secs, cpu, clutter = np.zeros(times.size), np.zeros(times.size), np.zeros(times.size)
     for k in range(times.size):
         idx = order[bounds[k] : bounds[k + 1]]
-        t0 = time.perf_counter()
-        res = tracker.step(plots.take(idx))
-        secs[k] = time.perf_counter() - t0
+        scan = plots.take(idx)
+        t0, c0 = time.perf_counter(), time.process_time()
+        res = tracker.step(scan)
+        secs[k], cpu[k] = time.perf_counter() - t0, time.process_time() - c0
         clutter[k] = res.clutter_per_scan
         seq_track[bounds[k] : bounds[k + 1]] = res.plot_track
         seq_track[res.started_from[0]] = res.started_from[1]
@@ -605,4 +611,5 @@ def run_tracker(tracker: MultiTargetTracker, plots: Plots, all_tracks: bool = Fa
         secs,
         clutter,
         ever,
+        cpu,
     )

@@ -128,3 +128,19 @@ def test_id_switches_and_fragmentation():
     assert parts["gospa"] ** 2 == pytest.approx(
         parts["localisation"] ** 2 + parts["missed"] ** 2 + parts["false"] ** 2
     )
+
+
+def test_targets_passing_close_do_not_count_as_a_swap():
+    """Two targets cross within 2 m; their tracks keep their own targets: no id switch
+    (a per-scan optimal assignment alone would swap them at the crossing)."""
+    times = np.arange(5.0)
+    xa = np.array([-20.0, -10.0, 0.0, 10.0, 20.0])
+    tt = np.repeat(times, 2)
+    tid = np.tile(["A", "B"], 5)
+    tpos = np.stack([np.stack([xa, xa], -1).ravel(), np.stack([xa, -xa], -1).ravel()], -1)
+    # track 1 follows A, track 2 follows B, both 1 m off towards the other target
+    est = tpos + np.stack([np.zeros(10), np.tile([-1.0, 1.0], 5)], -1)
+    est[4] = [0.0, 1.0]  # at the crossing A's track is nearer B ...
+    est[5] = [0.0, -1.0]  # ... and B's nearer A
+    s = score_run(times, tt, tid, tpos, tt, np.tile([1, 2], 5), est)
+    assert s.id_switches == 0 and s.fragmentations == 0

@@ -153,8 +153,7 @@ class NoiseLevels:
         mu = np.where(any_ok[:, None], w / np.maximum(tot, 1e-300), c)
         status = np.where(any_ok, PlotStatus.UPDATED, PlotStatus.REJECTED).astype(np.int8)
         outer = self._outer(new, mu, status)
-        with np.errstate(divide="ignore"):
-            mix_ll = np.where(any_ok, top[:, 0] + np.log(tot[:, 0]), np.nan)
+        mix_ll = np.where(any_ok, top[:, 0] + np.log(np.where(any_ok, tot[:, 0], 1.0)), np.nan)
         return outer.replace(log_likelihood=mix_ll)
 
     def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:

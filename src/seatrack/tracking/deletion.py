@@ -25,13 +25,13 @@ def position_std(P: FloatArray, d: int) -> FloatArray:
         return np.zeros(0)
     block = P[:, :d, :d]
     finite: NDArray[np.bool_] = np.asarray(np.isfinite(block).all(axis=(-1, -2)))
+    block = np.where(finite[:, None, None], block, 0.0)
     if d == 2:  # closed form
         a, b, c = block[:, 0, 0], block[:, 0, 1], block[:, 1, 1]
         lam = 0.5 * (a + c) + np.sqrt(0.25 * (a - c) ** 2 + b**2)
     else:
-        lam = np.linalg.eigvalsh(np.where(finite[:, None, None], block, 0.0))[:, -1]
-    with np.errstate(invalid="ignore"):
-        return np.where(finite, np.sqrt(np.maximum(lam, 0.0)), np.nan)
+        lam = np.linalg.eigvalsh(block)[:, -1]
+    return np.where(finite, np.sqrt(np.maximum(lam, 0.0)), np.nan)
 
 
 def to_delete(

@@ -102,7 +102,7 @@ class TrackerConfig:
     max_misses: int | None = param(
         None, unit="scans",
         doc="delete after this many misses in a row (none: when a live target would show "
-        "such a run with probability below 1 %, from the detection probability)",
+        "such a run with probability below 0.1 %, from the detection probability)",
         min=1,
     )  # fmt: skip
     max_position_std: float = param(

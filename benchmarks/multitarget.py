@@ -60,7 +60,7 @@ from typing import Any
 import numpy as np
 
 from seatrack.evaluate.montecarlo import format_table
-from seatrack.evaluate.multitarget import RunScores, score_run
+from seatrack.evaluate.multitarget import RunScores, score_run, summary_row
 from seatrack.filters.base import Plots, SensorNoise
 from seatrack.filters.ekf import EKF, EKFConfig
 from seatrack.simulate.multitarget import MultiTargetRun, TargetPopulation, simulate_multitarget
@@ -310,13 +310,13 @@ COLUMNS = [
     ("tracker", "tracker", ""),
     ("gospa", "GOSPA m", ".1f"),
     ("rms", "RMS GOSPA", ".1f"),
-    ("loc", "loc", ".1f"),
+    ("localisation", "loc", ".1f"),
     ("missed", "missed", ".1f"),
     ("false", "false", ".1f"),
     ("n_missed", "miss/scan", ".2f"),
     ("n_false", "false/scan", ".2f"),
-    ("switches", "id sw", "d"),
-    ("frag", "frag", "d"),
+    ("id_switches", "id sw", ".0f"),
+    ("fragmentations", "frag", ".0f"),
     ("ms", "CPU ms/scan", ".2f"),
     ("wall", "wall ms", ".1f"),
     ("speedup", "x faster", ".0f"),
@@ -324,22 +324,12 @@ COLUMNS = [
 
 
 def row(name: str, runs: list[MultiTargetRun], results: list[Result]) -> dict[str, Any]:
-    sc = [score(r, res) for r, res in zip(runs, results, strict=True)]
-    parts = [s.rms_parts() for s in sc]
-    return {
-        "tracker": name,
-        "gospa": float(np.mean([s.mean_gospa for s in sc])),
-        "rms": float(np.mean([p["gospa"] for p in parts])),
-        "loc": float(np.mean([p["localisation"] for p in parts])),
-        "missed": float(np.mean([p["missed"] for p in parts])),
-        "false": float(np.mean([p["false"] for p in parts])),
-        "n_missed": float(np.mean([s.scans.n_missed.mean() for s in sc])),
-        "n_false": float(np.mean([s.scans.n_false.mean() for s in sc])),
-        "switches": int(sum(s.id_switches for s in sc)),
-        "frag": int(sum(s.fragmentations for s in sc)),
-        "ms": 1000 * float(np.median(np.concatenate([r.cpu for r in results]))),
-        "wall": 1000 * float(np.median(np.concatenate([r.seconds for r in results]))),
-    }
+    """One table row: scores (``evaluate.multitarget.summary_row``), CPU and wall ms/scan."""
+    cpu = 1000 * np.concatenate([r.cpu for r in results])
+    out = summary_row(name, [score(r, res) for r, res in zip(runs, results, strict=True)], cpu)
+    out["ms"] = out.pop("ms_per_scan")
+    out["wall"] = 1000 * float(np.median(np.concatenate([r.seconds for r in results])))
+    return out
 
 
 def print_table(title: str, rows: list[dict[str, Any]]) -> None:

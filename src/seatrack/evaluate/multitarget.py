@@ -372,22 +372,25 @@ def track_scenario_run(
     return TrackedRun(sim, out, scores, 1000 * float(np.median(out.seconds_per_scan)))
 
 
-def summary_row(name: str, runs: Sequence[TrackedRun]) -> dict[str, Any]:
-    """Averages over runs of the scores of one tracker (one table row)."""
-    parts = [r.scores.rms_parts() for r in runs]
+def summary_row(
+    name: str, scores: Sequence[RunScores], ms_per_scan: Sequence[float]
+) -> dict[str, Any]:
+    """Averages over runs of the scores of one tracker (one table row; ``ms_per_scan``:
+    the median over runs of each run's time per scan)."""
+    parts = [s.rms_parts() for s in scores]
     mean = lambda v: float(np.mean(v))  # noqa: E731
     return {
         "tracker": name,
-        "gospa": mean([r.scores.mean_gospa for r in runs]),
+        "gospa": mean([s.mean_gospa for s in scores]),
         "rms": mean([q["gospa"] for q in parts]),
         "localisation": mean([q["localisation"] for q in parts]),
         "missed": mean([q["missed"] for q in parts]),
         "false": mean([q["false"] for q in parts]),
-        "n_missed": mean([r.scores.scans.n_missed.mean() for r in runs]),
-        "n_false": mean([r.scores.scans.n_false.mean() for r in runs]),
-        "id_switches": mean([r.scores.id_switches for r in runs]),
-        "fragmentations": mean([r.scores.fragmentations for r in runs]),
-        "ms_per_scan": float(np.median([r.ms_per_scan for r in runs])),
+        "n_missed": mean([s.scans.n_missed.mean() for s in scores]),
+        "n_false": mean([s.scans.n_false.mean() for s in scores]),
+        "id_switches": mean([s.id_switches for s in scores]),
+        "fragmentations": mean([s.fragmentations for s in scores]),
+        "ms_per_scan": float(np.median(ms_per_scan)),
     }
 
 
@@ -441,7 +444,10 @@ def evaluate_multitarget(
         table = {**method_config(scenario, sens, m), **tracker_table}
         for assoc in ("gnn", "jpda"):
             tracked = [track_scenario_run(sim, m, table, assoc, c, p) for sim in sims]
-            rows.append(summary_row(f"{m} + {assoc}", tracked))
+            name = f"{m} + {assoc}"
+            rows.append(
+                summary_row(name, [r.scores for r in tracked], [r.ms_per_scan for r in tracked])
+            )
             firsts[f"{m}_{assoc}"] = tracked[0]
     n_plots = np.mean([len(s.plots) / s.scan_times.size for s in sims])
     title = (

@@ -383,7 +383,9 @@ class MultiTargetTracker:
         best2 = gnn(cand.track[c2], cand.plot[c2], log_lr[c2] - log_miss[cand.track[c2]], B, N)
         t2 = np.flatnonzero(best2 >= 0)
         best = np.where(best2 >= 0, best2, best)
-        new, hit = self._update(pred, plots, hyp_t, hyp_p, hyp_w, miss_w, t2, best2[t2])
+        new, updated = self._update(pred, plots, hyp_t, hyp_p, hyp_w, miss_w, t2, best2[t2])
+        # a hit: the track's plot (JPDA: its most probable plot, not the miss) updated it
+        hit = updated & (best >= 0)
         best = np.where(hit, best, -1)
         used = np.full(N, -1, np.int64)
         used[best[best >= 0]] = np.flatnonzero(best >= 0)

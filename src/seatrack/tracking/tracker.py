@@ -110,7 +110,7 @@ class TrackerConfig:
         min=0, exclusive_min=True,
     )  # fmt: skip
     max_speed: float = param(
-        50.0, key="max_speed_kn", unit="kn", doc="speed gate of two-point initiation",
+        40.0, key="max_speed_kn", unit="kn", doc="speed gate of two-point initiation",
         min=0, exclusive_min=True,
     )  # fmt: skip
     association: str = param("gnn", doc="association of confirmed tracks", choices=("gnn", "jpda"))

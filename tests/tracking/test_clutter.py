@@ -37,9 +37,9 @@ def test_clutter_rate_converges_to_the_mean_count():
     assert ClutterRate(given=7.0).per_scan == 7.0
 
 
-def test_detection_rate_counts_closed_gaps_only():
+def test_detection_rate():
     d = DetectionRate(prior=0.9, weight=20)
     for _ in range(100):
-        d.update(hits=8, resolved_misses=2)  # 80 %
+        d.update(hits=8, misses=2)  # 80 %
     assert d.pd == pytest.approx(0.8, abs=0.01)
     assert DetectionRate(given=0.95).pd == 0.95

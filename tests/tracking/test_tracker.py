@@ -208,3 +208,21 @@ def test_rejected_update_counts_as_a_miss():
     sim = _scenario(seed=9, clutter=0.0, targets=3)
     out = MultiTargetTracker(Rejecting(EKFConfig(q=0.1), SN), SN).run(sim.plots)
     assert np.all(out.status != TrackStatus.CONFIRMED)
+
+
+def test_3d_plots_with_range_rate():
+    sn = SensorNoise(sigma_range=15.0, sigma_azimuth=np.radians(0.3),
+                     sigma_elevation=np.radians(0.3), sigma_range_rate=0.5)  # fmt: skip
+    radar = SensorConfig(
+        "r", "radar3d", ("azimuth", "range", "elevation", "range_rate"),
+        (sn.sigma_azimuth, sn.sigma_range, sn.sigma_elevation, sn.sigma_range_rate),
+        p_detect=0.95, clutter_density=5.0, clutter_range=(500.0, 13000.0), scan_period=2.5,
+    )  # fmt: skip
+    pop = TargetPopulation(targets=4, births_per_scan=0.0, mean_life=0.0, crossings=0,
+                           range_limits=(2000.0, 12000.0))  # fmt: skip
+    sim = simulate_multitarget(pop, radar, 80.0, np.random.default_rng(11), observer=[0, 0, 30])
+    flt = EKF(EKFConfig(q=0.1), sn, d=3, range_rate=True)
+    out = MultiTargetTracker(flt, sn).run(sim.plots)
+    s = _score(sim, out)
+    assert s.scans.n_missed[sim.scan_times >= 20].mean() < 0.3
+    assert np.isfinite(out.columns["z_m"]).all()

@@ -15,8 +15,8 @@ space.
   no confirmed track explains (for JPDA: the scan's plots minus the sum of the association
   probabilities), averaged over the scans with an exponential memory of ``memory`` scans.
   The first scan has no tracks, so the estimate starts high and settles as tracks form.
-* :class:`DetectionRate` estimates the detection probability from the hits and the
-  closed gaps of the confirmed tracks.
+* :class:`DetectionRate` estimates the detection probability: of the confirmed tracks
+  updated at a scan, the share updated again at the next.
 """
 
 from __future__ import annotations
@@ -101,20 +101,24 @@ class ClutterRate:
 
 
 class DetectionRate:
-    """Detection probability from the confirmed tracks: hits over hits plus *resolved*
-    misses -- the misses of a gap that a later hit closed. The misses before a deletion
-    are left out: they are mostly targets that have gone, not missed detections. A prior
-    of ``prior`` with the weight of ``weight`` scans keeps the early estimate sensible."""
+    """Detection probability from the confirmed tracks: of the tracks updated at one scan,
+    the share updated again at the next. Counting only the scan after a hit makes the
+    estimate blind to how runs of misses end -- closed by a hit, or by the deletion of the
+    track, which would otherwise be mistaken for the target's death and leave the long
+    runs out (an estimate biased high, shortening the automatic ``max_misses``, cutting
+    more runs...). A target that dies contributes one miss. A prior of ``prior`` with the
+    weight of ``weight`` scans keeps the early estimate sensible."""
 
     def __init__(self, given: float | None = None, prior: float = 0.9, weight: float = 20.0):
         self.given = given
         self.hits = prior * weight
         self.misses = (1.0 - prior) * weight
 
-    def update(self, hits: int, resolved_misses: int) -> None:
-        """Add one scan: confirmed tracks updated, and the gaps those updates closed."""
+    def update(self, hits: int, misses: int) -> None:
+        """Add one scan: of the confirmed tracks updated at the last scan, how many were
+        updated again (``hits``) and how many were not (``misses``)."""
         self.hits += hits
-        self.misses += resolved_misses
+        self.misses += misses
 
     @property
     def pd(self) -> float:

@@ -464,8 +464,8 @@ class MultiTargetTracker:
     def _bookkeeping(self, hit: NDArray[np.bool_]) -> NDArray[np.int8]:
         """Hits, misses, ages, confirmation; the status of every track this scan."""
         tr, (m, n) = self.tracks, self.config.m_of_n
-        closed = tr.confirmed & hit
-        self.detection.update(int(closed.sum()), int(tr.misses[closed].sum()))
+        after_hit = tr.confirmed & (tr.misses == 0)  # tracks updated at the last scan
+        self.detection.update(int((after_hit & hit).sum()), int((after_hit & ~hit).sum()))
         tr.hits = tr.hits + hit
         tr.age = tr.age + 1
         tr.misses = np.where(hit, 0, tr.misses + 1)

@@ -23,9 +23,9 @@ def position_std(P: FloatArray, d: int) -> FloatArray:
     """Major-axis standard deviation (m) of the position block ``P[:, :d, :d]``."""
     if P.shape[0] == 0:
         return np.zeros(0)
-    block = P[:, :d, :d]
-    finite: NDArray[np.bool_] = np.asarray(np.isfinite(block).all(axis=(-1, -2)))
-    block = np.where(finite[:, None, None], block, 0.0)
+    raw = P[:, :d, :d]
+    finite: NDArray[np.bool_] = np.asarray(np.isfinite(raw).all(axis=(-1, -2)))
+    block = np.where(finite[:, None, None], raw, 0.0)
     if d == 2:  # closed form
         a, b, c = block[:, 0, 0], block[:, 0, 1], block[:, 1, 1]
         lam = 0.5 * (a + c) + np.sqrt(0.25 * (a - c) ** 2 + b**2)

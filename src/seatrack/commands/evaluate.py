@@ -105,6 +105,13 @@ def register(app: typer.Typer) -> None:
         from seatrack.simulate.scenarios import MAX_RUNS, load_scenario, resolve_scenario
 
         sc = load_scenario(resolve_scenario(scenario))
+        if sc.multitarget is not None:  # unlabelled plots: the multi-target tracker
+            from seatrack.evaluate.multitarget import evaluate_multitarget
+
+            mt = None if methods is None else [m.strip() for m in methods.split(",") if m.strip()]
+            n_mt, s_mt = sc.runs if runs is None else runs, sc.seed if seed is None else seed
+            typer.echo(evaluate_multitarget(sc, n_mt, s_mt, mt, sensor, csv_out, plots))
+            return
         names = _methods(methods)
         n = sc.runs if runs is None else runs
         s = sc.seed if seed is None else seed

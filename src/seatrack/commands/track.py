@@ -68,12 +68,34 @@ def register(app: typer.Typer) -> None:
         method: str = typer.Option("ekf", "--method", "-m", help=f"filter: {names}"),
         config: Path | None = typer.Option(None, "--config", help="TOML file of method parameters"),
         out: Path = typer.Option(..., "--out", "-o", help="TRACK.csv to write (one row per plot)"),
+        all_tracks: bool = typer.Option(
+            False, "--all-tracks", help="unlabelled plots: also tentative tracks"
+        ),
+        plots_out: Path | None = typer.Option(
+            None, "--plots-out", help="unlabelled plots: each plot with its track or clutter"
+        ),
+        plot: Path | None = typer.Option(
+            None, "--plot", help="unlabelled plots: PNG of plots and tracks"
+        ),
+        association: str | None = typer.Option(
+            None, "--association", help="unlabelled plots: gnn or jpda"
+        ),
     ) -> None:
-        """Run a tracking filter over recorded radar/sonar plots."""
+        """Run a tracking filter over recorded radar/sonar plots (without a track column:
+        the multi-target tracker, see docs/tracking.md)."""
         from seatrack.commands.options import prepare_outputs
         from seatrack.filters.registry import get_method
         from seatrack.io.atomic import atomic_path
+        from seatrack.io.multitarget import has_track_column, track_unlabelled
         from seatrack.io.plots import read_plots
+
+        if not has_track_column(plots_csv):
+            typer.echo(
+                track_unlabelled(
+                    plots_csv, out, method, config, all_tracks, plots_out, plot, association
+                )
+            )
+            return
 
         runner = get_method(method)
         cfg = load_config(config)

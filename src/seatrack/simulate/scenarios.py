@@ -72,6 +72,7 @@ from numpy.typing import NDArray
 
 from seatrack.geometry import KNOT_MPS, geodetic_to_enu
 from seatrack.io.table import MAX_TIME_S, InputError
+from seatrack.simulate.multitarget import TargetPopulation, parse_multitarget
 from seatrack.simulate.sensors import Measurements, NoiseModel, observe, uniform_clutter
 from seatrack.simulate.toml_reader import TomlReader, describe, join_key
 from seatrack.simulate.trajectories import Leg, Trajectory, trajectory
@@ -238,6 +239,7 @@ class Scenario:
     description: str = ""
     path: str = ""
     extra: Mapping[str, Any] = field(default_factory=dict)
+    multitarget: TargetPopulation | None = None  # generated targets (simulate.multitarget)
 
     @property
     def target_names(self) -> list[str]:
@@ -297,6 +299,7 @@ _TOP_KEYS = (
     "targets",
     "sensors",
     "evaluate",
+    "multitarget",
 )
 _PLATFORM_KEYS = (
     "name",
@@ -639,7 +642,11 @@ def parse_scenario(doc: Mapping[str, Any], path: str = "<scenario>") -> Scenario
         raise r.error("dt_s", f"longer than duration_s ({duration:g} s)")
     _check_work(r, duration, dt, len(targets), sensors)
     extra = _method_tables(r, doc.get("evaluate", {}))
-    return Scenario(name, duration, dt, own, targets, sensors, seed, runs, description, path, extra)
+    mt = doc.get("multitarget")
+    population = None if mt is None else parse_multitarget(r.table(mt, "multitarget"), path)
+    return Scenario(
+        name, duration, dt, own, targets, sensors, seed, runs, description, path, extra, population
+    )
 
 
 def _check_work(

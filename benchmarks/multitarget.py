@@ -1,0 +1,521 @@
+"""Benchmark: multi-target tracking from unlabelled plots, seatrack against Stone Soup.
+
+The same plots go through both. Coastal radar at the origin (2-D, range 15 m, azimuth
+0.3 deg, scan 2.5 s, clutter window 0.5-16 km), ships born and dying during the run
+(:mod:`seatrack.simulate.multitarget`: births, exponential lifetimes, exits from the
+1-15 km annulus, 0.5-3 deg/s turns, speed changes, crossing pairs), clutter uniform in
+range and azimuth, missed detections.
+
+Evaluation scenarios (never used for tuning; seeds from ``EVAL_SEED``), 200 s (81 scans):
+
+* ``S10``: 10 ships at the start, 10 clutter plots/scan, Pd 0.95
+* ``S30``: 30 ships, 30 clutter plots/scan, Pd 0.9
+* ``S100``: 100 ships, 100 clutter plots/scan, Pd 0.8
+
+Tuning scenarios (seeds from ``TUNE_SEED``, other generator settings: 20 ships / 20
+clutter / Pd 0.9 and 40 ships / 50 clutter / Pd 0.85, more births, shorter lives) chose
+seatrack's defaults (``TrackerConfig``, the noise levels of :mod:`seatrack.tracking.auto`)
+and Stone Soup's settings: ``--tune`` re-runs both searches and prints them.
+
+Trackers:
+
+* ``seatrack gnn`` / ``seatrack jpda`` (the headline rows) --
+  :class:`seatrack.tracking.MultiTargetTracker` with the reference EKF given ONLY the
+  sensor's nominal noise: process noise (two-level IMM from the ship class), clutter
+  density, detection probability, deletion and gates chosen automatically;
+* ``seatrack gnn, one q`` -- the same with a single process noise ``SINGLE_Q``, the best
+  fixed q on the tuning scenarios (labelled tuned; Stone Soup's family exactly);
+* ``stonesoup gnn`` -- Stone Soup 1.9.1 ``MultiTargetTracker``: EKF
+  (``ExtendedKalmanPredictor`` on two ``ConstantVelocity`` models, ``ExtendedKalmanUpdater``
+  with ``CartesianToBearingRange``), ``DistanceHypothesiser`` (Mahalanobis, the same
+  0.999 chi-square gate), ``GNNWith2DAssignment``, ``MultiMeasurementInitiator``,
+  ``UpdateTimeStepsDeleter``;
+* ``stonesoup jpda`` -- the same with ``PDAHypothesiser`` (the TRUE Pd and clutter
+  density, the same gate) and ``JPDAwithEHM`` (exact JPDA), states merged by
+  ``gm_reduce_single`` as in Stone Soup's JPDA tutorial; a track counts as updated (for
+  the deleter) when its most probable hypothesis is a detection.
+
+Stone Soup's process noise (same CV white-noise-acceleration family), confirmation count,
+deletion steps, holding-track deletion and initial speed sigma were tuned on the tuning
+scenarios by coordinate descent (``STONESOUP``). Metrics: mean GOSPA (c = 100 m, p = 2,
+alpha = 2) over all scans, its RMS decomposition (localisation / missed / false), missed
+and false targets per scan, id switches, fragmentations (CLEAR MOT matching), and the
+time per scan: processor time of this process (median over scans; seatrack best of
+``--repeat`` runs, Stone Soup one run -- its runs take minutes) and wall time. The machine
+is shared: the load average is printed; processor time is the figure that the load
+affects least. The scaling curve runs 10 to 1,000 ships with as many clutter plots per
+scan (range 1-40 km, no births or deaths), 17 scans; Stone Soup's GNN only up to
+``--ss-max`` ships.
+
+Run: ``python benchmarks/multitarget.py`` (everything, about an hour on a loaded machine),
+``--quick`` (S10 only, 30 scans, scaling to 100), ``--tune`` (re-run the searches first).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import math
+import os
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from seatrack.evaluate.montecarlo import format_table
+from seatrack.evaluate.multitarget import RunScores, score_run, summary_row
+from seatrack.filters.base import Plots, SensorNoise
+from seatrack.filters.ekf import EKF, EKFConfig
+from seatrack.simulate.multitarget import MultiTargetRun, TargetPopulation, simulate_multitarget
+from seatrack.simulate.scenarios import SensorConfig
+from seatrack.tracking import MultiTargetTracker, TrackerConfig
+from seatrack.tracking.auto import noise_levels, per_track_filter, scan_period
+from seatrack.tracking.gating import gate_threshold
+
+EVAL_SEED = 15_2026
+TUNE_SEED = 15_77
+DEG = math.pi / 180
+SIGMA_R, SIGMA_AZ, PERIOD = 15.0, 0.3 * DEG, 2.5
+C_GOSPA, P_GOSPA = 100.0, 2.0
+
+#: seatrack's single process-noise EKF: the best fixed q on the tuning scenarios (m^2/s^3)
+SINGLE_Q = 0.1
+#: Stone Soup settings found by ``--tune`` on the tuning scenarios
+STONESOUP = {"q": 0.1, "min_points": 3, "deleter_steps": 3, "speed_sigma": 5.0, "hold_steps": 3}
+
+
+@dataclass(frozen=True)
+class Case:
+    name: str
+    targets: int
+    clutter: float
+    pd: float
+    duration: float = 200.0
+    births: float = 0.03
+    life: float = 1800.0
+    range_max: float = 15000.0
+
+
+EVAL = [Case("S10", 10, 10, 0.95), Case("S30", 30, 30, 0.9), Case("S100", 100, 100, 0.8)]
+TUNE = [
+    Case("T20", 20, 20, 0.9, births=0.05, life=600.0),
+    Case("T40", 40, 50, 0.85, births=0.05, life=600.0),
+]
+
+
+def radar(case: Case) -> SensorConfig:
+    return SensorConfig(
+        "radar", "radar2d", ("azimuth", "range"), (SIGMA_AZ, SIGMA_R),
+        p_detect=case.pd, clutter_density=case.clutter,
+        clutter_range=(500.0, case.range_max + 1000.0), scan_period=PERIOD,
+    )  # fmt: skip
+
+
+def simulate(case: Case, seed: int) -> MultiTargetRun:
+    pop = TargetPopulation(
+        targets=case.targets,
+        births_per_scan=case.births,
+        mean_life=case.life,
+        range_limits=(1000.0, case.range_max),
+    )
+    return simulate_multitarget(pop, radar(case), case.duration, np.random.default_rng(seed))
+
+
+@dataclass
+class Result:
+    """Estimated positions per scan (rows) and the wall and processor time per scan."""
+
+    t: np.ndarray
+    track: np.ndarray
+    pos: np.ndarray
+    seconds: np.ndarray
+    cpu: np.ndarray
+
+
+def score(run: MultiTargetRun, res: Result) -> RunScores:
+    return score_run(
+        run.scan_times, run.truth_t, run.truth_id, run.truth_pos[:, :2],
+        res.t, res.track, res.pos, C_GOSPA, P_GOSPA,
+    )  # fmt: skip
+
+
+# ---------------------------------------------------------------------------
+# seatrack
+# ---------------------------------------------------------------------------
+SENSOR = SensorNoise(sigma_range=SIGMA_R, sigma_azimuth=SIGMA_AZ)
+
+
+def run_seatrack(run: MultiTargetRun, config: TrackerConfig, q: float | None = None) -> Result:
+    """The tracker with the reference EKF; ``q`` None: process noise chosen automatically
+    (as ``seatrack track`` does), else this fixed PSD."""
+    given = set() if q is None else {"q"}
+    flt = per_track_filter(EKF, EKFConfig(q=q or 1.0), given, SENSOR, 2, False,
+                           scan_period(run.plots.t))  # fmt: skip
+    trk = MultiTargetTracker(flt, SENSOR, config)
+    out = trk.run(run.plots)
+    pos = np.stack([out.columns["x_m"], out.columns["y_m"]], -1) if out.t.size else np.zeros((0, 2))
+    return Result(out.t, out.track, pos, out.seconds_per_scan, out.cpu_seconds_per_scan)
+
+
+# ---------------------------------------------------------------------------
+# Stone Soup
+# ---------------------------------------------------------------------------
+def _ss_scans(plots: Plots, model: Any) -> list[tuple[datetime.datetime, set[Any]]]:
+    from stonesoup.types.array import StateVector
+    from stonesoup.types.detection import Detection
+
+    t0 = datetime.datetime(2024, 1, 1)
+    out = []
+    for tk in np.unique(plots.t):
+        m = plots.t == tk
+        ts = t0 + datetime.timedelta(seconds=float(tk))
+        bearing = (np.pi / 2 - plots.azimuth[m] + np.pi) % (2 * np.pi) - np.pi  # CCW from East
+        dets = {
+            Detection(StateVector([b, r]), timestamp=ts, measurement_model=model)
+            for b, r in zip(bearing, plots.range[m], strict=True)
+        }
+        out.append((ts, dets))
+    return out
+
+
+def _ss_components(s: dict[str, float], gate_p: float) -> dict[str, Any]:
+    from stonesoup.dataassociator.neighbour import GNNWith2DAssignment
+    from stonesoup.deleter.time import UpdateTimeStepsDeleter
+    from stonesoup.hypothesiser.distance import DistanceHypothesiser
+    from stonesoup.initiator.simple import MultiMeasurementInitiator
+    from stonesoup.measures import Mahalanobis
+    from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
+    from stonesoup.models.transition.linear import (
+        CombinedLinearGaussianTransitionModel,
+        ConstantVelocity,
+    )
+    from stonesoup.predictor.kalman import ExtendedKalmanPredictor
+    from stonesoup.types.array import StateVector
+    from stonesoup.types.state import GaussianState
+    from stonesoup.updater.kalman import ExtendedKalmanUpdater
+
+    trans = CombinedLinearGaussianTransitionModel(
+        [ConstantVelocity(s["q"]), ConstantVelocity(s["q"])]
+    )
+    model = CartesianToBearingRange(
+        ndim_state=4, mapping=(0, 2), noise_covar=np.diag([SIGMA_AZ**2, SIGMA_R**2])
+    )
+    predictor = ExtendedKalmanPredictor(trans)
+    updater = ExtendedKalmanUpdater(model)
+    hyp = DistanceHypothesiser(
+        predictor,
+        updater,
+        measure=Mahalanobis(),
+        missed_distance=math.sqrt(gate_threshold(gate_p, 2)),
+    )
+    sv = s["speed_sigma"] ** 2
+    initiator = MultiMeasurementInitiator(
+        prior_state=GaussianState(StateVector([0.0, 0.0, 0.0, 0.0]), np.diag([0.0, sv, 0.0, sv])),
+        measurement_model=model,
+        deleter=UpdateTimeStepsDeleter(int(s["hold_steps"])),
+        data_associator=GNNWith2DAssignment(hyp),
+        updater=updater,
+        min_points=int(s["min_points"]),
+    )
+    return {
+        "model": model, "predictor": predictor, "updater": updater, "hyp": hyp,
+        "initiator": initiator, "deleter": UpdateTimeStepsDeleter(int(s["deleter_steps"])),
+    }  # fmt: skip
+
+
+def _ss_rows(tracks: Any, ts: datetime.datetime, t: float, rows: list[Any]) -> None:
+    for trk in tracks:
+        st = trk.state
+        if st.timestamp == ts:
+            rows.append((t, id(trk), float(st.state_vector[0, 0]), float(st.state_vector[2, 0])))
+
+
+def run_stonesoup(
+    run: MultiTargetRun, s: dict[str, float], kind: str, pd: float, clutter: float,
+    max_scans: int | None = None,
+) -> Result:  # fmt: skip
+    """Stone Soup GNN or JPDA over the plots (``clutter``: true false plots per scan)."""
+    c = _ss_components(s, 0.999)
+    scans = _ss_scans(run.plots, c["model"])[:max_scans]
+    t0 = scans[0][0]
+    rows: list[tuple[float, int, float, float]] = []
+    secs, cpu = [], []
+    if kind == "gnn":
+        from stonesoup.dataassociator.neighbour import GNNWith2DAssignment
+        from stonesoup.tracker.simple import MultiTargetTracker as SSTracker
+
+        tracker = SSTracker(
+            initiator=c["initiator"], deleter=c["deleter"], detector=iter(scans),
+            data_associator=GNNWith2DAssignment(c["hyp"]), updater=c["updater"],
+        )  # fmt: skip
+        it = iter(tracker)
+        for ts, _ in scans:
+            a, b = time.perf_counter(), time.process_time()
+            _, tracks = next(it)
+            secs.append(time.perf_counter() - a)
+            cpu.append(time.process_time() - b)
+            _ss_rows(tracks, ts, (ts - t0).total_seconds() + float(run.scan_times[0]), rows)
+    else:
+        volume = (run.plots.range.max() - run.plots.range.min()) * 2 * math.pi
+        step = _ss_jpda_step(c, pd, clutter / volume)
+        tracks: set[Any] = set()
+        for ts, dets in scans:
+            a, b = time.perf_counter(), time.process_time()
+            tracks = step(tracks, dets, ts)
+            secs.append(time.perf_counter() - a)
+            cpu.append(time.process_time() - b)
+            _ss_rows(tracks, ts, (ts - t0).total_seconds() + float(run.scan_times[0]), rows)
+    arr = np.array(rows, dtype=float).reshape(-1, 4)
+    return Result(arr[:, 0], arr[:, 1].astype(np.int64), arr[:, 2:4], np.array(secs), np.array(cpu))
+
+
+def _ss_jpda_step(c: dict[str, Any], pd: float, density: float) -> Callable[..., set[Any]]:
+    from stonesoup.dataassociator.probability import JPDAwithEHM
+    from stonesoup.functions import gm_reduce_single
+    from stonesoup.hypothesiser.probability import PDAHypothesiser
+    from stonesoup.types.array import StateVectors
+    from stonesoup.types.update import GaussianStateUpdate
+
+    hyp = PDAHypothesiser(
+        predictor=c["predictor"], updater=c["updater"], clutter_spatial_density=density,
+        prob_detect=pd, prob_gate=0.999,
+    )  # fmt: skip
+    assoc = JPDAwithEHM(hypothesiser=hyp)
+
+    def step(tracks: set[Any], dets: set[Any], ts: datetime.datetime) -> set[Any]:
+        hyps = assoc.associate(tracks, dets, ts)
+        used = set()
+        for trk in tracks:
+            states, weights = [], []
+            for h in hyps[trk]:
+                if h:
+                    states.append(c["updater"].update(h))
+                    used.add(h.measurement)
+                else:
+                    states.append(h.prediction)
+                weights.append(float(h.probability))
+            means = StateVectors([st.state_vector for st in states])
+            covars = np.stack([st.covar for st in states], axis=2)
+            mean, cov = gm_reduce_single(means, covars, np.asarray(weights))
+            # the dominant hypothesis decides whether this counts as an update (deleter)
+            top = max(hyps[trk], key=lambda h: float(h.probability))
+            trk.append(GaussianStateUpdate(mean, cov, hypothesis=top, timestamp=ts))
+        tracks = tracks - c["deleter"].delete_tracks(tracks)
+        return tracks | c["initiator"].initiate(dets - used, ts)
+
+    return step
+
+
+# ---------------------------------------------------------------------------
+# Tables
+# ---------------------------------------------------------------------------
+COLUMNS = [
+    ("tracker", "tracker", ""),
+    ("gospa", "GOSPA m", ".1f"),
+    ("rms", "RMS GOSPA", ".1f"),
+    ("localisation", "loc", ".1f"),
+    ("missed", "missed", ".1f"),
+    ("false", "false", ".1f"),
+    ("n_missed", "miss/scan", ".2f"),
+    ("n_false", "false/scan", ".2f"),
+    ("id_switches", "id sw", ".0f"),
+    ("fragmentations", "frag", ".0f"),
+    ("ms", "CPU ms/scan", ".2f"),
+    ("wall", "wall ms", ".1f"),
+    ("speedup", "x faster", ".0f"),
+]
+
+
+def row(name: str, runs: list[MultiTargetRun], results: list[Result]) -> dict[str, Any]:
+    """One table row: scores (``evaluate.multitarget.summary_row``), CPU and wall ms/scan."""
+    cpu = 1000 * np.concatenate([r.cpu for r in results])
+    out = summary_row(name, [score(r, res) for r, res in zip(runs, results, strict=True)], cpu)
+    out["ms"] = out.pop("ms_per_scan")
+    out["wall"] = 1000 * float(np.median(np.concatenate([r.seconds for r in results])))
+    return out
+
+
+def print_table(title: str, rows: list[dict[str, Any]]) -> None:
+    from seatrack.evaluate.montecarlo import Column
+
+    cols = [Column(k, h, f) for k, h, f in COLUMNS]
+    print(f"\n{title}\n{format_table(rows, cols)}", flush=True)
+
+
+def best_of(fn: Callable[[], Result], repeat: int) -> Result:
+    """Run ``fn`` ``repeat`` times; keep the result with the smallest median time per scan."""
+    out = [fn() for _ in range(repeat)]
+    return min(out, key=lambda r: float(np.median(r.cpu)))
+
+
+# ---------------------------------------------------------------------------
+# Tuning
+# ---------------------------------------------------------------------------
+def tune_seatrack(runs: list[MultiTargetRun]) -> None:
+    """Grids of the tracker parameters on the tuning runs (prints the mean GOSPA)."""
+    base = TrackerConfig()
+    grids: dict[str, list[Any]] = {
+        "q": [None, 0.03, 0.1, 0.3],  # None: the automatic noise levels
+        "m_of_n": [(3, 3), (3, 4), (3, 5), (4, 5)],
+        "gate_probability": [0.99, 0.999, 0.9999],
+        "max_speed": [10.0, 25.7, 40.0],
+        "init_scans": [2, 3],
+        "association": ["gnn", "jpda"],
+    }
+    for name, values in grids.items():
+        for v in values:
+            cfg, q = base, None
+            if name == "q":
+                q = v
+            else:
+                cfg = replace(base, **{name: v})
+            g = [score(r, run_seatrack(r, cfg, q)).mean_gospa for r in runs]
+            each = ", ".join(f"{x:.1f}" for x in g)
+            print(f"seatrack {name}={v}: mean GOSPA {np.mean(g):.1f} ({each})", flush=True)
+
+
+def tune_stonesoup(runs: list[MultiTargetRun], cases: list[Case]) -> dict[str, float]:
+    """Coordinate descent over Stone Soup's GNN settings on the tuning runs."""
+    s = dict(STONESOUP)
+    grids = {
+        "q": [0.03, 0.1, 0.3],
+        "min_points": [2, 3, 4],
+        "deleter_steps": [3, 4, 5],
+        "speed_sigma": [5.0, 10.0, 20.0],
+        "hold_steps": [1, 2, 3],
+    }
+    seen: dict[tuple[Any, ...], float] = {}
+
+    def cost(trial: dict[str, float]) -> float:
+        key = tuple(sorted(trial.items()))
+        if key not in seen:
+            seen[key] = float(np.mean([
+                score(r, run_stonesoup(r, trial, "gnn", c.pd, c.clutter)).mean_gospa
+                for r, c in zip(runs, cases, strict=True)
+            ]))  # fmt: skip
+            print(f"stonesoup {trial}: mean GOSPA {seen[key]:.1f}", flush=True)
+        return seen[key]
+
+    best = cost(s)
+    for name, values in grids.items():
+        for v in values:
+            trial = {**s, name: v}
+            g = cost(trial)
+            if g < best:
+                best, s = g, trial
+    print(f"stonesoup tuned: {s} (mean GOSPA {best:.1f})")
+    return s
+
+
+# ---------------------------------------------------------------------------
+# Main
+# ---------------------------------------------------------------------------
+def compare(cases: list[Case], seeds: list[int], ss: dict[str, float], repeat: int,
+            max_scans: int | None, jpda_ss: bool) -> None:  # fmt: skip
+    for case, seed in zip(cases, seeds, strict=True):
+        run = simulate(
+            replace(
+                case, duration=case.duration if max_scans is None else PERIOD * (max_scans - 1)
+            ),
+            seed,
+        )
+        nplots = len(run.plots) / run.scan_times.size
+        rows = []
+        res = best_of(lambda: run_seatrack(run, TrackerConfig()), repeat)
+        rows.append(row("seatrack gnn (defaults)", [run], [res]))
+        res = best_of(lambda: run_seatrack(run, TrackerConfig(association="jpda")), repeat)
+        rows.append(row("seatrack jpda (defaults)", [run], [res]))
+        res = best_of(lambda: run_seatrack(run, TrackerConfig(), q=SINGLE_Q), repeat)
+        rows.append(row(f"seatrack gnn, one q={SINGLE_Q:g} (tuned)", [run], [res]))
+        ss_gnn = run_stonesoup(run, ss, "gnn", case.pd, case.clutter)
+        rows.append(row("stonesoup gnn (tuned)", [run], [ss_gnn]))
+        if jpda_ss:
+            ss_j = run_stonesoup(run, ss, "jpda", case.pd, case.clutter)
+            rows.append(row("stonesoup jpda (tuned)", [run], [ss_j]))
+        ref = rows[3]["ms"]
+        for r in rows:
+            r["speedup"] = ref / r["ms"]
+        print_table(
+            f"{case.name}: {case.targets} ships at start, {case.clutter:g} clutter/scan, Pd "
+            f"{case.pd}, {run.scan_times.size} scans, {nplots:.0f} plots/scan, seed {seed} "
+            f"(x faster: against stonesoup gnn)",
+            rows,
+        )
+
+
+def scaling(sizes: list[int], ss: dict[str, float], ss_max: int, repeat: int, scans: int) -> None:
+    rows = []
+    for n in sizes:
+        case = Case(f"N{n}", n, float(n), 0.9, duration=PERIOD * (scans - 1), births=0.0,
+                    life=0.0, range_max=40000.0)  # fmt: skip
+        run = simulate(case, EVAL_SEED + 7 * n)
+        res = best_of(lambda: run_seatrack(run, TrackerConfig()), repeat)
+        r: dict[str, Any] = {"targets": n, "plots": len(run.plots) / run.scan_times.size}
+        s = score(run, res)
+        # steady state: leave out the first scans (no tracks yet, nothing to associate)
+        r["st_ms"] = 1000 * float(np.median(res.cpu[3:]))
+        r["st_max"] = 1000 * float(np.max(res.cpu[3:]))
+        r["st_wall"] = 1000 * float(np.median(res.seconds[3:]))
+        r["st_gospa"] = s.mean_gospa
+        if n <= ss_max:
+            ss_res = run_stonesoup(run, ss, "gnn", case.pd, case.clutter)
+            r["ss_ms"] = 1000 * float(np.median(ss_res.cpu[3:]))
+            r["ss_gospa"] = score(run, ss_res).mean_gospa
+            r["ratio"] = r["ss_ms"] / r["st_ms"]
+        else:
+            r["ss_ms"] = r["ss_gospa"] = r["ratio"] = float("nan")
+        rows.append(r)
+        print(f"  {n} targets done", flush=True)
+    from seatrack.evaluate.montecarlo import Column
+
+    cols = [
+        Column("targets", "ships", "d"), Column("plots", "plots/scan", ".0f"),
+        Column("st_ms", "seatrack CPU ms/scan", ".2f"), Column("st_max", "max ms", ".1f"),
+        Column("st_wall", "wall ms", ".1f"),
+        Column("st_gospa", "seatrack GOSPA", ".0f"),
+        Column("ss_ms", "stonesoup gnn CPU ms/scan", ".0f"),
+        Column("ss_gospa", "stonesoup GOSPA", ".0f"), Column("ratio", "x faster", ".0f"),
+    ]  # fmt: skip
+    print(f"\nscaling: ships = clutter plots per scan, Pd 0.9, {scans} scans, range 1-40 km; "
+          f"median over scans 4-{scans} (seatrack best of {repeat} runs); Stone Soup GNN "
+          f"stopped above {ss_max} ships\n{format_table(rows, cols)}")  # fmt: skip
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="S10 only, 30 scans, scaling to 100")
+    ap.add_argument("--tune", action="store_true", help="re-run the parameter searches first")
+    ap.add_argument("--repeat", type=int, default=3, help="seatrack runs per case (best time)")
+    ap.add_argument("--ss-max", type=int, default=100, help="largest Stone Soup scaling case")
+    ap.add_argument("--no-jpda", action="store_true", help="skip Stone Soup's JPDA")
+    args = ap.parse_args()
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"machine: {os.cpu_count()} cores, load average {load:.1f} at start")
+    ss = dict(STONESOUP)
+    if args.tune:
+        tune_runs = [simulate(c, TUNE_SEED + k) for k, c in enumerate(TUNE)]
+        tune_seatrack(tune_runs)
+        ss = tune_stonesoup(tune_runs, TUNE)
+    q_s, q_m = noise_levels(PERIOD)
+    print(
+        f"seatrack defaults: {TrackerConfig()}; process noise from the ship class: "
+        f"IMM of q = {q_s:.4f} and {q_m:.3f} m^2/s^3 (only the sensor noise is given)"
+    )
+    print(
+        f"stonesoup settings: {ss}; gate probability 0.999 (Mahalanobis "
+        f"{math.sqrt(gate_threshold(0.999, 2)):.2f}); JPDA with the true Pd and clutter density"
+    )
+    cases = EVAL[:1] if args.quick else EVAL
+    seeds = [EVAL_SEED + k for k in range(len(cases))]
+    compare(cases, seeds, ss, 1 if args.quick else args.repeat, 30 if args.quick else None,
+            not args.no_jpda)  # fmt: skip
+    sizes = [10, 30, 100] if args.quick else [10, 30, 100, 300, 1000]
+    scaling(sizes, ss, min(args.ss_max, 30) if args.quick else args.ss_max, args.repeat, 17)
+    load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
+    print(f"load average {load:.1f} at the end")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,333 @@
+"""Unlabelled plot files in, TRACKS.csv (and the plot labels) out: ``seatrack track`` on
+plots without a ``track`` column.
+
+Input (``PLOTS.csv``, header names exact, extra columns ignored): ``time_s``, ``range_m``,
+``azimuth_deg`` (clockwise from North, [0, 360)), optional ``elevation_deg``,
+``range_rate_mps`` and ``sensor_x_m``, ``sensor_y_m``, ``sensor_z_m``. All plots of a scan
+share one time; rows are in time order (non-decreasing). The sensor velocity, for the
+range rate, is the finite difference of the sensor positions of successive scans.
+
+Outputs, all written atomically (:mod:`seatrack.io.atomic`):
+
+* ``TRACKS.csv`` -- one row per confirmed track per scan while it lives: ``track``,
+  ``time_s``, the common columns (``x_m`` ... ``std_z_m``), ``status`` (``confirmed`` or
+  ``coasting``; ``tentative`` rows too with ``all_tracks``), ``plot_line`` (input line of
+  the plot that updated the track, empty when coasting), then the filter's own columns;
+* ``--plots-out`` -- every input plot, in input order, with its input ``line`` and the
+  ``track`` it went to or ``clutter``;
+* ``--plot`` -- a PNG of plots and tracks (:func:`seatrack.tracking.plot.tracks_figure`).
+"""
+
+from __future__ import annotations
+
+import csv
+import importlib
+from collections.abc import Mapping
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seatrack.config import ConfigError, config_keys, load_toml, parse_config
+from seatrack.filters.base import COMMON_COLUMNS, Plots, RecursiveFilter, SensorNoise
+from seatrack.io.atomic import atomic_path, atomic_write, check_output_path
+from seatrack.io.table import InputError, Table, check_times, decode_text, read_csv_table
+from seatrack.tracking import MultiTargetTracker, TrackerConfig, TrackerRun, TrackStatus
+from seatrack.tracking.auto import per_track_filter, scan_period
+
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "CONTRACT_FILTERS",
+    "has_track_column",
+    "read_unlabelled_plots",
+    "make_filter",
+    "split_config",
+    "save_picture",
+    "write_tracks",
+    "write_plot_labels",
+    "write_unlabelled_plots",
+    "track_unlabelled",
+    "UnlabelledRun",
+]
+
+REQUIRED = ("time_s", "range_m", "azimuth_deg")
+OPTIONAL = ("elevation_deg", "range_rate_mps", "sensor_x_m", "sensor_y_m", "sensor_z_m")
+
+#: methods usable as the per-track filter: name -> (module, class). Each class honours
+#: :class:`~seatrack.filters.base.RecursiveFilter`, has a ``Config`` dataclass and is built
+#: as ``cls(config, sensor, d=d, range_rate=range_rate)``.
+CONTRACT_FILTERS: dict[str, tuple[str, str]] = {"ekf": ("seatrack.filters.ekf", "EKF")}
+
+
+def has_track_column(path: str | Path) -> bool:
+    """Whether the CSV header of ``path`` has a ``track`` column (a labelled plot file)."""
+    p = Path(path)
+    if not p.is_file():
+        raise InputError(f"{p}: file not found")
+    with p.open("rb") as fh:
+        first = fh.readline()
+    text, _ = decode_text(first)  # UTF-8 (BOM dropped), else Latin-1, as every reader
+    try:
+        header = next(csv.reader([text]), [])
+    except csv.Error as exc:
+        raise InputError(f"{p}, line 1: not valid CSV ({exc})") from None
+    return "track" in [h.strip() for h in header]
+
+
+def _check_values(tab: Table) -> None:
+    def bad(mask: NDArray[np.bool_], what: str) -> None:
+        if mask.any():
+            i = int(np.argmax(mask))
+            raise InputError(f"{tab.path}, line {tab.lines[i]}: {what}")
+
+    for c in OPTIONAL:
+        if c in tab:
+            nan = np.isnan(tab[c])
+            bad(nan & ~nan.all(), f"column {c} is empty here but filled on other rows")
+    bad(tab["range_m"] <= 0, "range_m must be > 0")
+    az = tab["azimuth_deg"]
+    bad((az < 0) | (az >= 360), "azimuth_deg must be in [0, 360)")
+    if "elevation_deg" in tab:
+        bad(np.abs(tab["elevation_deg"]) > 90, "elevation_deg must be in [-90, 90]")
+
+
+def read_unlabelled_plots(path: str | Path) -> Plots:
+    """Read an unlabelled plot file into :class:`~seatrack.filters.base.Plots` (SI units,
+    radians; ``line`` holds each plot's input line).
+
+    Raises
+    ------
+    InputError
+        Naming the file, line and problem: missing columns, empty or non-numeric values,
+        range <= 0, azimuth outside [0, 360), elevation outside [-90, 90], times out of
+        order, a column filled on some rows only.
+    """
+    tab = read_csv_table(path, REQUIRED, OPTIONAL)
+    _check_values(tab)
+    check_times(tab, "time_s", strict=False)
+    t = tab["time_s"]
+    sensor = np.zeros((t.size, 3))
+    for k, c in enumerate(("sensor_x_m", "sensor_y_m", "sensor_z_m")):
+        if c in tab and not np.isnan(tab[c]).all():
+            sensor[:, k] = tab[c]
+    times, first, scan = np.unique(t, return_index=True, return_inverse=True)
+    vel = np.zeros((times.size, 3))
+    if times.size > 1:
+        vel = np.stack([np.gradient(sensor[first, k], times) for k in range(3)], -1)
+
+    def opt(c: str, f: Any = None) -> FloatArray | None:
+        if c not in tab or np.isnan(tab[c]).all():
+            return None
+        return np.asarray(f(tab[c]) if f else tab[c])
+
+    return Plots(
+        t,
+        tab["range_m"],
+        np.radians(tab["azimuth_deg"]),
+        opt("elevation_deg", np.radians),
+        opt("range_rate_mps"),
+        sensor,
+        vel[scan.ravel()],
+        tab.lines.astype(np.int64),
+    )
+
+
+# ---------------------------------------------------------------------------
+# Configuration and the per-track filter
+# ---------------------------------------------------------------------------
+def split_config(table: Mapping[str, Any], source: str) -> tuple[dict[str, Any], ...]:
+    """Keys of the sensor, of the tracker (top level or a ``[tracker]`` table), the rest."""
+    sensor_keys, tracker_keys = config_keys(SensorNoise), config_keys(TrackerConfig)
+    sensor: dict[str, Any] = {}
+    tracker: dict[str, Any] = {}
+    rest: dict[str, Any] = {}
+    for k, v in table.items():
+        if k == "tracker":
+            if not isinstance(v, Mapping):
+                raise ConfigError(f"{source}: [tracker] must be a table")
+            tracker.update(v)
+        elif k in sensor_keys:
+            sensor[k] = v
+        elif k in tracker_keys:
+            tracker[k] = v
+        else:
+            rest[k] = v
+    return sensor, tracker, rest
+
+
+def make_filter(
+    method: str,
+    table: Mapping[str, Any],
+    sensor: SensorNoise,
+    plots: Plots,
+    source: str = "config",
+) -> RecursiveFilter:
+    """The per-track filter ``method`` configured from ``table`` (its own keys); without a
+    process noise in ``table``, adaptive noise levels from the target class and the scan
+    period (:func:`seatrack.tracking.auto.per_track_filter`)."""
+    if method not in CONTRACT_FILTERS:
+        raise ValueError(
+            f"method {method!r} cannot be the per-track filter of the multi-target tracker "
+            f"yet; choose one of {', '.join(sorted(CONTRACT_FILTERS))}"
+        )
+    module, name = CONTRACT_FILTERS[method]
+    cls = getattr(importlib.import_module(module), name)
+    cfg = parse_config(cls.Config, table, source=source)
+    rr = plots.range_rate is not None
+    return per_track_filter(cls, cfg, set(table), sensor, plots.d, rr, scan_period(plots.t))
+
+
+# ---------------------------------------------------------------------------
+# Writers
+# ---------------------------------------------------------------------------
+def _text(a: NDArray[Any]) -> NDArray[Any]:
+    if a.dtype.kind == "f":
+        out = np.char.mod("%.6f", np.where(np.isfinite(a), a, 0.0))
+        return np.where(np.isfinite(a), out, "")
+    return a.astype(str)
+
+
+def write_tracks(path: str | Path, run: TrackerRun, plots: Plots) -> int:
+    """Write TRACKS.csv (see the module docstring); returns the number of rows."""
+    extra = [c for c in run.columns if c not in COMMON_COLUMNS]
+    n = run.t.size
+    labels = np.array([s.label for s in TrackStatus])
+    line = np.where(run.plot >= 0, plots.line[np.maximum(run.plot, 0)], -1) if n else run.plot
+    cols = [
+        run.track.astype(str),
+        np.char.mod("%.6f", run.t) if n else np.zeros(0, str),
+        *(_text(np.asarray(run.columns[c])) for c in COMMON_COLUMNS),
+        labels[run.status],
+        np.where(line >= 0, line.astype(str), ""),
+        *(_text(np.asarray(run.columns[c])) for c in extra),
+    ]
+    with atomic_write(path, newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["track", "time_s", *COMMON_COLUMNS, "status", "plot_line", *extra])
+        w.writerows(zip(*cols, strict=True))
+    return n
+
+
+def write_unlabelled_plots(path: str | Path, plots: Plots) -> int:
+    """Write plots as an unlabelled PLOTS.csv (time order; the sensor columns when the
+    sensor is not at the origin): the input of the multi-target tracker."""
+    order = np.argsort(plots.t, kind="stable")
+    p = plots.take(order)
+    head = ["time_s", "range_m", "azimuth_deg"]
+    cols = [p.t, p.range, np.degrees(p.azimuth) % 360.0]
+    if p.elevation is not None:
+        head.append("elevation_deg")
+        cols.append(np.degrees(p.elevation))
+    if p.range_rate is not None:
+        head.append("range_rate_mps")
+        cols.append(p.range_rate)
+    if np.any(p.sensor != 0):
+        head += ["sensor_x_m", "sensor_y_m", "sensor_z_m"]
+        cols += [p.sensor[:, 0], p.sensor[:, 1], p.sensor[:, 2]]
+    text = [np.char.mod("%.6f", c) for c in cols]
+    with atomic_write(path, newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(head)
+        w.writerows(zip(*text, strict=True))
+    return len(p)
+
+
+def write_plot_labels(path: str | Path, plots: Plots, labels: NDArray[np.int64]) -> int:
+    """Write every plot with its input line and its track id (or ``clutter``)."""
+    order = np.argsort(plots.line, kind="stable")
+    num = lambda a: np.char.mod("%.6f", a)  # noqa: E731
+    cols = [plots.line.astype(str), num(plots.t), num(plots.range), num(np.degrees(plots.azimuth))]
+    head = ["line", "time_s", "range_m", "azimuth_deg"]
+    if plots.elevation is not None:
+        cols.append(np.char.mod("%.6f", np.degrees(plots.elevation)))
+        head.append("elevation_deg")
+    if plots.range_rate is not None:
+        cols.append(np.char.mod("%.6f", plots.range_rate))
+        head.append("range_rate_mps")
+    cols.append(np.where(labels >= 0, labels.astype(str), "clutter"))
+    head.append("track")
+    with atomic_write(path, newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(head)
+        w.writerows(zip(*(c[order] for c in cols), strict=True))
+    return len(plots)
+
+
+# ---------------------------------------------------------------------------
+# The command's entry point
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class UnlabelledRun:
+    """What :func:`track_unlabelled` did."""
+
+    plots: Plots
+    run: TrackerRun
+    tracker: MultiTargetTracker
+    rows: int
+
+    def summary(self, method: str, out: Path) -> str:
+        n_clutter = int((self.run.plot_track < 0).sum())
+        return (
+            f"{method} multi-target ({self.tracker.config.association}): "
+            f"{self.run.scan_times.size} scans, {len(self.plots)} plots "
+            f"({n_clutter} clutter or unconfirmed), {self.run.confirmed_ids.size} confirmed "
+            f"tracks, {self.rows} rows written to {out}; clutter "
+            f"{self.tracker.clutter.per_scan:.1f} plots/scan, Pd {self.tracker.detection.pd:.2f}"
+        )
+
+
+def track_unlabelled(
+    plots_csv: Path,
+    out: Path,
+    method: str = "ekf",
+    config: Path | None = None,
+    all_tracks: bool = False,
+    plots_out: Path | None = None,
+    plot: Path | None = None,
+    association: str | None = None,
+) -> str:
+    """``seatrack track`` on a file without a ``track`` column; returns the summary line."""
+    for p in (out, plots_out, plot):
+        if p is not None:
+            check_output_path(p)
+    table = load_toml(config) if config is not None else {}
+    source = str(config) if config is not None else "config"
+    s_tab, t_tab, rest = split_config(table, source)
+    if association is not None:
+        if association not in ("gnn", "jpda"):
+            raise ValueError(f"--association: must be gnn or jpda, got {association!r}")
+        t_tab = {**t_tab, "association": association}
+    sensor = parse_config(SensorNoise, s_tab, source=source)
+    tcfg = parse_config(TrackerConfig, t_tab, source=source)
+    plots = read_unlabelled_plots(plots_csv)
+    flt = make_filter(method, rest, sensor, plots, source)
+    tracker = MultiTargetTracker(flt, sensor, tcfg)
+    run = tracker.run(plots, all_tracks=all_tracks)
+    rows = write_tracks(out, run, plots)
+    if plots_out is not None:
+        write_plot_labels(plots_out, plots, run.plot_track)
+    if plot is not None:
+        save_picture(plot, plots, run, title=f"{Path(plots_csv).name}: {method} + "
+                     f"{tcfg.association.upper()}")  # fmt: skip
+    return UnlabelledRun(plots, run, tracker, rows).summary(method, out)
+
+
+def save_picture(
+    path: Path,
+    plots: Plots,
+    run: TrackerRun,
+    truth: Mapping[Any, Any] | None = None,
+    gospa: Mapping[str, Any] | None = None,
+    title: str = "",
+) -> None:
+    """Write the plots-and-tracks PNG (with GOSPA over time when given) atomically."""
+    from seatrack.tracking.plot import tracks_figure
+
+    xy = plots.positions()[:, :2]
+    pos = np.stack([run.columns["x_m"], run.columns["y_m"]], -1) if run.t.size else np.zeros((0, 2))
+    fig = tracks_figure(xy, run.plot_track, run.t, run.track, run.status, pos, truth, gospa, title)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=110)

@@ -1,0 +1,24 @@
+"""Multi-target tracking from unlabelled plots: gating, association (GNN, JPDA),
+initiation (two-point, M-of-N), deletion, clutter estimation and the tracker itself.
+
+The layer above the filters: any :class:`~seatrack.filters.base.RecursiveFilter` is the
+per-track filter. See ``docs/tracking.md``.
+"""
+
+from seatrack.tracking.tracker import (
+    MultiTargetTracker,
+    ScanResult,
+    TrackerConfig,
+    TrackerRun,
+    TrackStatus,
+    run_tracker,
+)
+
+__all__ = [
+    "MultiTargetTracker",
+    "ScanResult",
+    "TrackerConfig",
+    "TrackerRun",
+    "TrackStatus",
+    "run_tracker",
+]

@@ -1,0 +1,101 @@
+"""``seatrack track`` on unlabelled plots and ``seatrack evaluate`` on a multi-target scenario."""
+
+import csv
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from seatrack.io.multitarget import track_unlabelled, write_unlabelled_plots
+from seatrack.simulate.multitarget import TargetPopulation, simulate_multitarget
+from seatrack.simulate.scenarios import SensorConfig
+
+
+def _seatrack(*args, cwd):
+    return subprocess.run(
+        [sys.executable, "-m", "seatrack.cli", *args], capture_output=True, text=True, cwd=cwd
+    )
+
+
+def _plots_file(path, seed=0):
+    radar = SensorConfig(
+        "r", "radar2d", ("azimuth", "range"), (np.radians(0.3), 15.0), p_detect=0.95,
+        clutter_density=8.0, clutter_range=(500.0, 12000.0), scan_period=2.5,
+    )  # fmt: skip
+    pop = TargetPopulation(targets=5, births_per_scan=0.0, mean_life=0.0, crossings=0,
+                           range_limits=(2000.0, 10000.0))  # fmt: skip
+    sim = simulate_multitarget(pop, radar, 100.0, np.random.default_rng(seed))
+    write_unlabelled_plots(path, sim.plots)
+    return sim
+
+
+def _rows(path):
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def test_unlabelled_plots_run_the_multitarget_tracker(tmp_path):
+    sim = _plots_file(tmp_path / "plots.csv")
+    cfg = tmp_path / "radar.toml"
+    cfg.write_text("sigma_range_m = 15.0\nsigma_azimuth_deg = 0.3\n")
+    r = _seatrack(
+        "track", "plots.csv", "--config", "radar.toml", "-o", "out/tracks.csv",
+        "--plots-out", "out/labels.csv", "--plot", "out/tracks.png", cwd=tmp_path,
+    )  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "multi-target (gnn)" in r.stdout and "5 confirmed tracks" in r.stdout
+    rows = _rows(tmp_path / "out/tracks.csv")
+    assert {x["status"] for x in rows} == {"confirmed", "coasting"}
+    assert len({x["track"] for x in rows}) == 5
+    labels = _rows(tmp_path / "out/labels.csv")
+    assert len(labels) == len(sim.plots)
+    # every plot accounted for, target plots with their track, clutter as clutter
+    target = sim.origin >= 0
+    lab = np.array([x["track"] for x in labels])
+    assert np.mean(lab[target] != "clutter") > 0.9 and np.mean(lab[~target] == "clutter") > 0.95
+    assert (tmp_path / "out/tracks.png").stat().st_size > 10_000
+
+
+def test_all_tracks_and_jpda(tmp_path):
+    _plots_file(tmp_path / "plots.csv", seed=1)
+    r = _seatrack("track", "plots.csv", "-o", "t.csv", "--all-tracks", "--association", "jpda",
+                  cwd=tmp_path)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "multi-target (jpda)" in r.stdout
+    assert "tentative" in {x["status"] for x in _rows(tmp_path / "t.csv")}
+
+
+def test_errors_are_one_line(tmp_path):
+    _plots_file(tmp_path / "plots.csv")
+    r = _seatrack("track", "plots.csv", "-o", "t.csv", "--association", "mht", cwd=tmp_path)
+    assert r.returncode == 2 and r.stderr.startswith("error: --association")
+    (tmp_path / "c.toml").write_text("m_of_n = [5, 2]\n")
+    with pytest.raises(ValueError, match="c.toml: m_of_n"):
+        track_unlabelled(tmp_path / "plots.csv", tmp_path / "t.csv", config=tmp_path / "c.toml")
+    with pytest.raises(ValueError, match="cannot be the per-track filter"):
+        track_unlabelled(tmp_path / "plots.csv", tmp_path / "t.csv", method="robust")
+    (tmp_path / "bad.csv").write_text("time_s,range_m,azimuth_deg\n0,100,10\n0,-1,10\n")
+    r = _seatrack("track", "bad.csv", "-o", "t.csv", cwd=tmp_path)
+    assert r.returncode == 2 and "bad.csv, line 3: range_m must be > 0" in r.stderr
+    assert not (tmp_path / "t.csv").exists()
+    assert "Traceback" not in r.stderr
+
+
+def test_evaluate_multitarget_scenario(tmp_path):
+    text = (
+        "name = 'mt'\nduration_s = 60.0\nseed = 4\nruns = 1\n"
+        "[multitarget]\ntargets = 4\nbirths_per_scan = 0.0\ncrossings = 1\n"
+        "[[targets]]\nposition_m = [5000.0, 0.0]\ncourse_deg = 0.0\nspeed_kn = 10.0\n"
+        "[[sensors]]\ntype = 'radar2d'\nsigma = { azimuth_deg = 0.3, range_m = 15.0 }\n"
+        "p_detect = 0.9\nclutter_density = 5.0\nclutter_range_m = [500.0, 16000.0]\n"
+        "scan_period_s = 2.5\nposition_m = [0.0, 0.0]\n"
+    )
+    (tmp_path / "mt.toml").write_text(text)
+    r = _seatrack("evaluate", "mt.toml", "--csv", "mt.csv", "--plots", "pics", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert "ekf + gnn" in r.stdout and "ekf + jpda" in r.stdout and "GOSPA" in r.stdout
+    rows = _rows(tmp_path / "mt.csv")
+    assert [x["tracker"] for x in rows] == ["ekf + gnn", "ekf + jpda"]
+    assert float(rows[0]["gospa"]) < 200
+    assert (tmp_path / "pics/multitarget_ekf_gnn.png").exists()

@@ -1,0 +1,112 @@
+"""Unlabelled plot files and the multi-target outputs."""
+
+import csv
+
+import numpy as np
+import pytest
+
+from seatrack.filters.base import Plots, SensorNoise
+from seatrack.io.multitarget import (
+    has_track_column,
+    make_filter,
+    read_unlabelled_plots,
+    write_plot_labels,
+    write_tracks,
+    write_unlabelled_plots,
+)
+from seatrack.io.table import InputError
+from seatrack.tracking import MultiTargetTracker
+from seatrack.tracking.adaptive import NoiseLevels
+
+
+def _write(path, rows, header="time_s,range_m,azimuth_deg"):
+    path.write_text(header + "\n" + "\n".join(rows) + "\n")
+    return path
+
+
+def test_read_and_round_trip(tmp_path):
+    rng = np.random.default_rng(0)
+    n = 30
+    p = Plots(
+        np.repeat(np.arange(10) * 2.0, 3), rng.uniform(1000, 9000, n), rng.uniform(0, 6.28, n),
+        None, rng.normal(0, 5, n), np.tile([[100.0, 50.0, 10.0]], (n, 1)),
+    )  # fmt: skip
+    f = tmp_path / "p.csv"
+    write_unlabelled_plots(f, p)
+    assert not has_track_column(f)
+    q = read_unlabelled_plots(f)
+    assert np.allclose(q.range, p.range, atol=1e-6) and np.allclose(q.azimuth, p.azimuth, atol=1e-8)
+    assert np.allclose(q.range_rate, p.range_rate, atol=1e-6) and q.elevation is None
+    assert np.allclose(q.sensor, p.sensor) and np.allclose(q.sensor_vel, 0.0)
+    assert q.line.tolist() == list(range(2, n + 2))
+
+
+@pytest.mark.parametrize(
+    "rows, match",
+    [
+        (["0,1000,10", "0,-5,10"], "line 3: range_m must be > 0"),
+        (["0,1000,10", "0,1000,360"], r"line 3: azimuth_deg must be in \[0, 360\)"),
+        (["2,1000,10", "1,1000,10"], "line 3: time_s = 1 is earlier"),
+        (["0,1000,x"], "line 2: column azimuth_deg = 'x' is not a number"),
+    ],
+)
+def test_read_errors_name_the_line(tmp_path, rows, match):
+    with pytest.raises(InputError, match=match):
+        read_unlabelled_plots(_write(tmp_path / "p.csv", rows))
+
+
+def test_partly_filled_optional_column(tmp_path):
+    f = _write(
+        tmp_path / "p.csv",
+        ["0,1000,10,1", "0,1000,10,"],
+        "time_s,range_m,azimuth_deg,range_rate_mps",
+    )
+    with pytest.raises(InputError, match="line 3: column range_rate_mps is empty here"):
+        read_unlabelled_plots(f)
+
+
+def test_duplicate_times_are_scans(tmp_path):
+    f = _write(tmp_path / "p.csv", ["0,1000,10", "0,2000,20", "2.5,1010,10"])
+    p = read_unlabelled_plots(f)
+    assert len(p) == 3 and np.unique(p.t).size == 2
+    assert has_track_column(
+        _write(tmp_path / "l.csv", ["a,0,1000,10"], "track,time_s,range_m,azimuth_deg")
+    )
+
+
+def test_make_filter_and_unknown_method():
+    p = Plots(np.array([0.0, 2.0]), np.array([1000.0, 1000.0]), np.array([0.1, 0.1]))
+    assert isinstance(make_filter("ekf", {}, SensorNoise(), p), NoiseLevels)
+    assert not isinstance(make_filter("ekf", {"q": 0.5}, SensorNoise(), p), NoiseLevels)
+    with pytest.raises(ValueError, match="cannot be the per-track filter"):
+        make_filter("robust", {}, SensorNoise(), p)
+
+
+def test_outputs_account_for_every_plot(tmp_path):
+    rng = np.random.default_rng(1)
+    t = np.repeat(np.arange(8) * 2.5, 4)
+    # two steady targets and two clutter plots per scan
+    rr = np.column_stack([5000 + 10 * np.arange(8), 7000 - 5 * np.arange(8),
+                          rng.uniform(1000, 9000, (8, 2))]).ravel()  # fmt: skip
+    az = np.column_stack([np.full(8, 0.5), np.full(8, 2.0), rng.uniform(0, 6, (8, 2))]).ravel()
+    p = Plots(t, rr + rng.normal(0, 5, t.size), az, line=np.arange(t.size) + 2)
+    flt = make_filter("ekf", {}, SensorNoise(), p)
+    run = MultiTargetTracker(flt, SensorNoise()).run(p)
+    n = write_tracks(tmp_path / "tracks.csv", run, p)
+    with open(tmp_path / "tracks.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == n > 0
+    assert list(rows[0])[:2] == ["track", "time_s"] and "manoeuvre" in rows[0]
+    assert {r["status"] for r in rows} <= {"confirmed", "coasting"}
+    assert all(r["z_m"] == "" for r in rows)
+    used = [int(r["plot_line"]) for r in rows if r["plot_line"]]
+    write_plot_labels(tmp_path / "labels.csv", p, run.plot_track)
+    with open(tmp_path / "labels.csv") as fh:
+        lab = list(csv.DictReader(fh))
+    assert [int(r["line"]) for r in lab] == list(range(2, t.size + 2))
+    by_line = {int(r["line"]): r["track"] for r in lab}
+    for r in rows:
+        if r["plot_line"]:
+            assert by_line[int(r["plot_line"])] == r["track"]
+    assert {r["track"] for r in lab} - {"clutter"} == {r["track"] for r in rows}
+    assert set(used) <= set(by_line)

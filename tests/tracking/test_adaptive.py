@@ -1,0 +1,78 @@
+"""The noise-level IMM wrapper honours the contract and follows manoeuvres."""
+
+import numpy as np
+import pytest
+
+from seatrack.filters.base import Plots, PlotStatus, RecursiveFilter, SensorNoise, plot_gaussian
+from seatrack.filters.ekf import EKF, EKFConfig
+from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.tracking.adaptive import NoiseLevels
+
+SN = SensorNoise(sigma_range=10.0, sigma_azimuth=np.radians(0.2))
+
+
+def _plots(legs, seed=0, dt=2.5):
+    tr = trajectory([3000.0, 6000.0], np.radians(80), 10.0, legs, dt=dt)
+    m = observe(tr, None, ["range", "azimuth"], NoiseModel([10.0, np.radians(0.2)]),
+                np.random.default_rng(seed))  # fmt: skip
+    return Plots(m.t, m.z[:, 0], m.z[:, 1]), tr
+
+
+def _run(flt, plots):
+    x, P = plot_gaussian(plots.take([0]), SN, 10.0)
+    s = flt.initiate(plots.t[:1], x, P)
+    out = [s]
+    for k in range(1, len(plots)):
+        s = flt.update(flt.predict(s, plots.t[k : k + 1]), plots.take([k]))
+        out.append(s)
+    return out
+
+
+def test_is_a_recursive_filter_and_equals_the_filter_without_extra_noise():
+    plots, _ = _plots([Leg.straight(200.0)])
+    base = EKF(EKFConfig(q=0.05), SN)
+    imm = NoiseLevels(base, (0.0, 0.0), 0.05)
+    assert isinstance(imm, RecursiveFilter)
+    a, b = _run(base, plots), _run(imm, plots)
+    for sa, sb in zip(a, b, strict=True):
+        assert np.allclose(sa.x, sb.x) and np.allclose(sa.P, sb.P)
+    y1, S1 = base.innovation(a[-1], plots.take([0]))
+    y2, S2 = imm.innovation(b[-1], plots.take([0]))
+    assert np.allclose(y1, y2) and np.allclose(S1, S2)
+    assert b[-1].status[0] == PlotStatus.UPDATED
+    assert np.allclose(np.asarray(b[-1].aux["noise_mu"]).sum(1), 1.0)
+
+
+def test_manoeuvre_probability_rises_in_a_turn_and_beats_the_low_noise_filter():
+    legs = [Leg.straight(150.0), Leg.turn(np.radians(90), np.radians(3)), Leg.straight(100.0)]
+    plots, tr = _plots(legs, seed=1)
+    low = EKF(EKFConfig(q=0.005), SN)
+    imm = NoiseLevels(low, (0.0, 1.0), 0.02)
+    s_low, s_imm = _run(low, plots), _run(imm, plots)
+    mu = np.array([np.asarray(s.aux["noise_mu"])[0, 1] for s in s_imm])
+    t = plots.t
+    turn = (t > 155) & (t < 180)
+    straight = (t > 60) & (t < 145)
+    assert mu[turn].mean() > 0.5 > mu[straight].mean()
+    err = lambda ss: np.array([np.linalg.norm(s.x[0, :2] - p[:2]) for s, p in zip(ss, tr.pos)])  # noqa: E731
+    late = t > 150
+    assert np.sqrt(np.mean(err(s_imm)[late] ** 2)) < 0.6 * np.sqrt(np.mean(err(s_low)[late] ** 2))
+    cols = imm.columns(s_imm[-1])
+    assert "manoeuvre" in cols and 0 <= cols["manoeuvre"][0] <= 1
+
+
+def test_batch_operations_keep_the_nested_models():
+    plots, _ = _plots([Leg.straight(30.0)])
+    imm = NoiseLevels(EKF(EKFConfig(q=0.01), SN), (0.0, 1.0))
+    x, P = plot_gaussian(plots.take([0, 1, 2]), SN, 10.0)
+    s = imm.initiate(plots.t[:3], x, P)
+    assert s.aux["noise_models"].x.shape == (3, 2, 4)
+    sub = s.take([2, 0])
+    assert np.allclose(sub.aux["noise_models"].x[0, 0], x[2])
+
+
+def test_rejects_bad_parameters():
+    with pytest.raises(ValueError, match="noise levels"):
+        NoiseLevels(EKF(), (0.0,))
+    with pytest.raises(ValueError, match="p_switch"):
+        NoiseLevels(EKF(), (0.0, 1.0), 1.5)

@@ -31,8 +31,9 @@ import numpy as np  # noqa: E402
 
 from seatrack.commands.ais import track_columns  # noqa: E402
 from seatrack.data import AIS_SAMPLES, ais_sample  # noqa: E402
-from seatrack.filters.ais_tracker import AisTrackerConfig, track_reports, track_vessels  # noqa: E402
-from seatrack.io.ais import read_ais, to_local, write_tracks_csv  # noqa: E402
+from seatrack.filters.ais import AisTrackerConfig, track_reports, track_vessels  # noqa: E402
+from seatrack.geometry import local_frames  # noqa: E402
+from seatrack.io.ais import read_ais, write_tracks_csv  # noqa: E402
 
 DATA = ais_sample(AIS_SAMPLES[0]).parent  # the real files bundled in seatrack/data/ais
 REAL = list(AIS_SAMPLES)
@@ -105,7 +106,7 @@ def python_loop_anchor(path: Path, n: int, cfg: AisTrackerConfig) -> float:
     from seatrack.models import CoordinatedTurn
 
     r = read_ais([path])
-    fr = to_local(r)
+    fr = local_frames(r.mmsi, r.lat, r.lon, r.valid)
     ok = np.flatnonzero(r.valid)[:n]
     order = ok[np.lexsort((r.t[ok], r.mmsi[ok]))]
     model = CoordinatedTurn(q=cfg.q_accel, q_omega=cfg.q_turn)
@@ -147,7 +148,7 @@ def run_file(path: Path, cfg: AisTrackerConfig, out_dir: Path) -> dict[str, floa
         track_reports(r, cfg)
         track_best = min(track_best, time.perf_counter() - s)
     # the tracking kernel alone (local frame precomputed), best of 3
-    fr = to_local(r)
+    fr = local_frames(r.mmsi, r.lat, r.lon, r.valid)
     ok = r.valid
     best = math.inf
     for _ in range(3):

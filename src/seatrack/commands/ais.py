@@ -23,7 +23,7 @@ import typer
 
 
 def _track_one(paths: Sequence[str], config: Any) -> tuple[Any, Any]:
-    from seatrack.filters.ais_tracker import track_reports
+    from seatrack.filters.ais import track_reports
     from seatrack.io.ais import read_ais
 
     reports = read_ais(list(paths))
@@ -38,7 +38,7 @@ def track_files(
     ``use_dask``: one Dask task per file (vessels not merged across files; the results are
     concatenated in file order). Dask is imported lazily.
     """
-    from seatrack.filters.ais_tracker import AisTrackerConfig
+    from seatrack.filters.ais import AisTrackerConfig
 
     cfg = config or AisTrackerConfig()
     names = [str(p) for p in paths]
@@ -70,7 +70,7 @@ def track_files(
 
 def track_columns(tracks: Any) -> dict[str, np.ndarray]:
     """TRACKS.csv value columns (degrees / knots) from :class:`AisTracks`."""
-    from seatrack.filters.ais_tracker import OUTLIER_KINDS
+    from seatrack.filters.ais import OUTLIER_KINDS
     from seatrack.geometry import bearing_rad_to_deg, mps_to_knots
 
     course = np.asarray(tracks.course, float)
@@ -129,6 +129,25 @@ def summary_lines(reports: Any, tracks: Any) -> list[str]:
     return lines
 
 
+def map_tracks(reports: Any, tracks: Any) -> list[Any]:
+    """The map's :class:`~seatrack.report.html.VesselTrack` per vessel from
+    :class:`~seatrack.io.ais.AisReports` and their
+    :class:`~seatrack.filters.ais.AisTracks` (raw and smoothed positions)."""
+    from seatrack.report.html import vessel_tracks
+
+    return vessel_tracks(
+        reports.mmsi,
+        reports.t,
+        reports.lat,
+        reports.lon,
+        tracks.lat,
+        tracks.lon,
+        tracks.segment,
+        tracks.outlier,
+        reports.valid,
+    )
+
+
 def register(app: typer.Typer) -> None:
     """Add the ``ais`` sub-command to ``app``."""
 
@@ -162,7 +181,7 @@ def register(app: typer.Typer) -> None:
         use_dask: bool = typer.Option(False, "--dask", help="one Dask task per input file"),
     ) -> None:
         """Track vessels in AIS logs: smoothed position, course, speed, turn rate, outliers."""
-        from seatrack.filters.ais_tracker import AisTrackerConfig
+        from seatrack.filters.ais import AisTrackerConfig
         from seatrack.io.ais import write_tracks_csv
 
         cfg = AisTrackerConfig(
@@ -179,7 +198,7 @@ def register(app: typer.Typer) -> None:
             typer.echo(ln)
         typer.echo(f"wrote {out} ({n} rows)")
         if geojson is not None or html is not None:
-            from seatrack.report.html import map_tracks, write_geojson, write_html
+            from seatrack.report.html import write_geojson, write_html
 
             vt = map_tracks(reports, tracks)
             if geojson is not None:

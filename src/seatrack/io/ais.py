@@ -16,9 +16,9 @@ nothing is dropped silently. AIS "not available" codes are handled as the ITU-R 
 message definitions give them: latitude 91 and longitude 181 reject the row (no position),
 SOG 102.3 kn, COG 360 deg and heading 511 become NaN (the row stays usable).
 
-Times are seconds since the Unix epoch (UTC, float). Positions are converted to a local
-East-North frame per vessel with :func:`seatrack.geometry.geodetic_to_enu` by
-:func:`to_local`; :func:`from_local` maps smoothed positions back to WGS84.
+Times are seconds since the Unix epoch (UTC, float). The local East-North frames of the
+tracker are :func:`seatrack.geometry.local_frames` and
+:func:`seatrack.geometry.local_to_geodetic`.
 """
 
 from __future__ import annotations
@@ -33,7 +33,6 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.geometry import enu_to_geodetic, geodetic_to_enu
 from seatrack.io.table import InputError, read_csv_table
 
 FloatArray = NDArray[np.float64]
@@ -47,8 +46,6 @@ __all__ = [
     "read_ais",
     "concat_reports",
     "validate_reports",
-    "to_local",
-    "from_local",
     "rejection_counts",
 ]
 
@@ -458,84 +455,6 @@ def rejection_counts(r: AisReports) -> dict[str, int]:
             out[reason] = int(found.pop(reason))
     out.update({k: int(v) for k, v in found.items()})
     return out
-
-
-# ---------------------------------------------------------------------------
-# Local frame
-# ---------------------------------------------------------------------------
-@dataclass(frozen=True)
-class LocalFrame:
-    """Per-row local East-North-Up coordinates about one origin per vessel.
-
-    Attributes
-    ----------
-    enu : ndarray (N, 3)
-        East, North, Up (m) of each usable row (NaN for rejected rows).
-    lat0, lon0 : ndarray (N,)
-        Origin (deg) of the row's vessel frame (the vessel's first usable report).
-    """
-
-    enu: FloatArray
-    lat0: FloatArray
-    lon0: FloatArray
-    group: NDArray[np.int64] | None = None
-
-
-def to_local(r: AisReports) -> LocalFrame:
-    """Usable reports to a local East-North-Up frame, one tangent-plane origin per vessel.
-
-    A per-vessel origin keeps the tangent plane close to the track (a file-wide origin
-    would rotate North by the meridian convergence, degrees over a few hundred km).
-    Heights are 0 (sea level). Uses :func:`seatrack.geometry.geodetic_to_enu`.
-    """
-    n = len(r)
-    enu = np.full((n, 3), np.nan)
-    lat0 = np.full(n, np.nan)
-    lon0 = np.full(n, np.nan)
-    ok = np.flatnonzero(r.valid)
-    group = np.full(n, -1, dtype=np.int64)
-    if ok.size == 0:
-        return LocalFrame(enu, lat0, lon0, group)
-    vessels, first = np.unique(r.mmsi[ok], return_index=True)
-    group[ok] = np.searchsorted(vessels, r.mmsi[ok])
-    # origin of each vessel: its first usable report; all rows in one vectorised call
-    lat0[ok] = r.lat[ok[first]][group[ok]]
-    lon0[ok] = r.lon[ok[first]][group[ok]]
-    enu[ok] = geodetic_to_enu(r.lat[ok], r.lon[ok], 0.0, lat0[ok], lon0[ok])
-    return LocalFrame(enu, lat0, lon0, group)
-
-
-def from_local(
-    east: FloatArray,
-    north: FloatArray,
-    lat0: FloatArray,
-    lon0: FloatArray,
-    iterations: int = 2,
-) -> tuple[FloatArray, FloatArray]:
-    """Tangent-plane (East, North) about per-row origins back to WGS84 (lat, lon) at sea level.
-
-    The Up coordinate of the sea-level point is found by fixed-point iteration
-    ``U <- U - h(E, N, U)`` starting from the spherical ``-(E^2+N^2)/(2 R)``; that start is
-    within metres of the ellipsoid at 100 km, which moves lat/lon by centimetres; one
-    iteration brings it to the millimetre, two to well below 0.1 mm. Uses
-    :func:`seatrack.geometry.enu_to_geodetic`.
-    All rows in one vectorised call (per-row origins). NaN inputs give NaN outputs.
-    """
-    e = np.asarray(east, float)
-    nn = np.asarray(north, float)
-    lat = np.full(e.shape, np.nan)
-    lon = np.full(e.shape, np.nan)
-    ok = np.isfinite(e) & np.isfinite(nn) & np.isfinite(lat0) & np.isfinite(lon0)
-    if not ok.any():
-        return lat, lon
-    E, N = e[ok], nn[ok]
-    la0, lo0 = np.asarray(lat0, float)[ok], np.asarray(lon0, float)[ok]
-    U = -(E**2 + N**2) / (2.0 * 6_371_000.0)
-    for _ in range(iterations):
-        _, _, h = enu_to_geodetic(np.stack([E, N, U], -1), la0, lo0)
-        U = U - h
-    lat[ok], lon[ok], _ = enu_to_geodetic(np.stack([E, N, U], -1), la0, lo0)
-    return lat, lon
 
 
 # ---------------------------------------------------------------------------

@@ -21,8 +21,7 @@ from seatrack.filters.ais import (
     track_reports,
     track_vessels,
 )
-from seatrack.geometry import KNOT_MPS, angle_diff, bearing
-from seatrack.geometry import local_frames
+from seatrack.geometry import KNOT_MPS, angle_diff, bearing, local_frames
 from seatrack.io.ais import AisReports, read_ais_csv
 from seatrack.models import numerical_jacobian
 from seatrack.models.motion import ct_jacobian, ct_noise, ct_transition

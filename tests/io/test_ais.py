@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from ais_samples import FILES, data_file
+from seatrack.geometry import local_frames, local_to_geodetic
 from seatrack.io.ais import (
     REJECT_REASONS,
     detect_schema,
@@ -19,7 +20,6 @@ from seatrack.io.ais import (
     rejection_counts,
     write_tracks_csv,
 )
-from seatrack.geometry import local_frames, local_to_geodetic
 from seatrack.io.table import InputError
 
 

@@ -629,7 +629,7 @@ def run_kernel(inp: KernelInputs, cfg: AisTrackerConfig) -> KernelOutputs:
         loglik=np.full(n, np.nan),
     )
     c = np.ascontiguousarray
-    args = KernelInputs(*(c(a) for a in inp))
+    args = KernelInputs._make(c(a) for a in inp)
     par = kernel_params(cfg)
     chunks = vessel_chunks(args.starts, 8 * numba.get_num_threads())
     _track_kernel(args, par, out, chunks)

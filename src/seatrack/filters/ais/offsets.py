@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
@@ -10,7 +13,16 @@ from seatrack.filters.ais.config import NX, AisTrackerConfig
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["timestamp_offsets", "pos_cov", "MIN_OFFSET_REPORTS"]
+__all__ = [
+    "MIN_OFFSET_REPORTS",
+    "OffsetScores",
+    "apply_offsets",
+    "estimate_prior",
+    "offset_scores",
+    "pos_cov",
+    "prior_counts",
+    "timestamp_offsets",
+]
 
 #: fewest reports with an identifiable offset (speed x 1 s > 3 sigma_pos) for the prior
 MIN_OFFSET_REPORTS = 100
@@ -129,34 +141,120 @@ def timestamp_offsets(
     -------
     ndarray (N,)
         Offsets (s, whole numbers; 0 for reports not scored).
+
+    Notes
+    -----
+    The same computation in three steps, for tables split into vessel groups whose prior
+    must be estimated from all groups together (the result is then the same as for one
+    table; the counts are integers): :func:`offset_scores` per group,
+    :func:`estimate_prior` with a function summing :func:`prior_counts` over the groups,
+    :func:`apply_offsets` per group.
     """
-    k_max = int(config.max_time_offset_s)
-    out = np.zeros(xy.shape[0])
+    scores = offset_scores(xy, state, pos_cov, sig, used_offset, usable, config, leave_one_out)
+    prior = estimate_prior(
+        lambda p: prior_counts(scores, p), int(np.count_nonzero(scores.ident)), config
+    )
+    return apply_offsets(scores, prior, config)
+
+
+class OffsetScores(NamedTuple):
+    """Scores of the candidate offsets of the scored reports: ``rows`` (M,) their indices,
+    ``q`` (M, K) ``r_d^T C^-1 r_d`` per candidate ``-k_max..k_max``, ``ident`` (M,) whether
+    the offset is identifiable (``|v| * 1 s > 3 sigma_pos``); ``n`` rows in the table."""
+
+    rows: NDArray[np.int64]
+    q: FloatArray
+    ident: NDArray[np.bool_]
+    n: int
+
+
+def offset_scores(
+    xy: FloatArray,
+    state: FloatArray,
+    pos_cov: FloatArray,
+    sig: FloatArray,
+    used_offset: FloatArray,
+    usable: NDArray[np.bool_],
+    config: AisTrackerConfig,
+    leave_one_out: bool = True,
+) -> OffsetScores:
+    """The scores of :func:`timestamp_offsets` (same parameters) before the prior."""
+    k_max = max(int(config.max_time_offset_s), 0)
+    n = xy.shape[0]
     ok = usable & np.isfinite(state[:, :4]).all(axis=1) & np.isfinite(pos_cov).all(axis=(1, 2))
-    if k_max <= 0 or not ok.any():
-        return out
+    if k_max == 0:
+        ok[:] = False
+    idx = np.flatnonzero(ok)
     cand = np.arange(-k_max, k_max + 1, dtype=np.float64)
     v = state[ok, 2:4]
     sp = sig[ok, 0]
-    d_old = used_offset[ok]
     r0 = xy[ok] - state[ok, :2]  # residual of d = 0: r_d = r0 + v d
     q = np.empty((v.shape[0], cand.size))
     _offset_scores(
-        r0, v, d_old, pos_cov[ok], sp, sig[ok, 1], config.sigma_time_fine_s, cand, leave_one_out, q
+        r0,
+        v,
+        used_offset[ok],
+        pos_cov[ok],
+        sp,
+        sig[ok, 1],
+        config.sigma_time_fine_s,
+        cand,
+        leave_one_out,
+        q,
     )
     q = np.where(np.isfinite(q), q, np.where(cand == 0, 0.0, np.inf))  # degenerate: d = 0
-    speed2 = (v**2).sum(axis=1)
-    sp2 = sp**2
-    prior = np.where(cand == 0, 0.6, 0.4 / (cand.size - 1))
-    ident = speed2 > 9.0 * sp2
-    if np.count_nonzero(ident) < MIN_OFFSET_REPORTS:
-        return out  # too few reports on which an offset shows to estimate its prior
-    best = np.zeros(q.shape[0], dtype=np.int64)
+    ident = (v**2).sum(axis=1) > 9.0 * sp**2
+    return OffsetScores(idx, q, ident, n)
+
+
+def _winners(scores: OffsetScores, prior: FloatArray) -> NDArray[np.int64]:
+    """Index of the MAP candidate of every scored report."""
+    return np.argmin(0.5 * scores.q - np.log(prior), axis=1)
+
+
+def prior_counts(scores: OffsetScores, prior: FloatArray) -> NDArray[np.int64]:
+    """Counts of the MAP candidates under ``prior`` over the identifiable reports."""
+    return np.bincount(_winners(scores, prior)[scores.ident], minlength=prior.size)
+
+
+def estimate_prior(
+    counts: Callable[[FloatArray], NDArray[np.int64]], n_ident: int, config: AisTrackerConfig
+) -> FloatArray | None:
+    """Prior of the offsets for :func:`apply_offsets`, or None where the data show no
+    offsets (fewer than ``MIN_OFFSET_REPORTS`` identifiable reports, or an estimated
+    share of non-zero offsets below ``min_offset_share``).
+
+    ``counts(prior)`` returns the MAP counts under ``prior`` over all identifiable reports
+    (:func:`prior_counts`, summed over vessel groups); ``n_ident`` is their number. From
+    ``pi_0 = 0.6``, the prior is re-estimated from the counts (plus one each) three times;
+    the offsets are the winners under the prior of the third round, and the share test
+    uses the prior after it.
+    """
+    k_max = int(config.max_time_offset_s)
+    if k_max <= 0 or n_ident < MIN_OFFSET_REPORTS:
+        return None  # too few reports on which an offset shows to estimate its prior
+    size = 2 * k_max + 1
+    cand = np.arange(-k_max, k_max + 1)
+    prior = np.where(cand == 0, 0.6, 0.4 / (size - 1))
+    used = prior
     for _ in range(3):
-        best = np.argmin(0.5 * q - np.log(prior), axis=1)
-        count = np.bincount(best[ident], minlength=cand.size) + 1.0
+        used = prior
+        count = counts(used) + 1.0
         prior = count / count.sum()
     if 1.0 - prior[k_max] < config.min_offset_share:
-        return out  # too few offsets to tell from noise: the data show none
-    out[ok] = cand[best]
+        return None  # too few offsets to tell from noise: the data show none
+    return np.asarray(used, dtype=np.float64)
+
+
+def apply_offsets(
+    scores: OffsetScores, prior: FloatArray | None, config: AisTrackerConfig
+) -> FloatArray:
+    """Offsets (s) of every row: the MAP candidate of the scored reports under ``prior``
+    (:func:`estimate_prior`; None = no offsets), 0 elsewhere."""
+    out = np.zeros(scores.n)
+    if prior is None or scores.rows.size == 0:
+        return out
+    k_max = int(config.max_time_offset_s)
+    cand = np.arange(-k_max, k_max + 1, dtype=np.float64)
+    out[scores.rows] = cand[_winners(scores, prior)]
     return out

@@ -85,7 +85,7 @@ def merge_outputs(out: KernelOutputs, rows: NDArray[np.bool_], new: KernelOutput
     seg = new.segment
     seg[:] = np.where(seg >= 0, seg + int(out.segment.max(initial=0)) + 1, -1)
     for a_out, a_new in zip(out, new, strict=True):
-        a_out[rows] = a_new
+        np.asarray(a_out)[rows] = a_new
 
 
 def neighbours(

@@ -1,9 +1,19 @@
 """Refinement pass of the AIS tracker: timestamp offsets, noise without the outliers, and a
-per-vessel choice between a steady and a manoeuvring process noise."""
+per-vessel choice between a steady and a manoeuvring process noise.
+
+The pass is a :class:`Refinement` driven in steps, because the prior of the timestamp
+offsets is estimated from *all* vessels together: a table split into vessel groups (bounded
+memory, processes, a Dask cluster) runs each step on every group and estimates the prior
+between steps from the counts of all groups (:func:`drive`), which gives the same result as
+one table. :func:`refine_pass` drives one table.
+"""
 
 from __future__ import annotations
 
+import functools
+from collections.abc import Callable, Sequence
 from dataclasses import replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -11,98 +21,186 @@ from numpy.typing import NDArray
 from seatrack.filters.ais.config import AisTrackerConfig
 from seatrack.filters.ais.kernel import Force, KernelOutputs, OutlierKind
 from seatrack.filters.ais.noise import position_noise
-from seatrack.filters.ais.offsets import pos_cov, timestamp_offsets
+from seatrack.filters.ais.offsets import (
+    OffsetScores,
+    apply_offsets,
+    estimate_prior,
+    offset_scores,
+    pos_cov,
+    prior_counts,
+)
 from seatrack.filters.ais.plausibility import Rows, merge_outputs, run_rows
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["refine_pass"]
+__all__ = ["Refinement", "refine_pass", "drive"]
 
 
-def refine_pass(
-    rows: Rows, out: KernelOutputs, cfg: AisTrackerConfig
-) -> tuple[KernelOutputs, FloatArray]:
-    """Refinement pass: whole-second timestamp offsets, report noise without the outliers,
-    and a per-vessel choice of process noise (rows sorted by (vessel, time); ``out`` = the
-    kernel outputs of the passes before, whose outlier decisions are kept).
+class Refinement:
+    """The refinement pass of one vessel group (rows sorted by (vessel, time); ``out`` =
+    the kernel outputs of the passes before, whose outlier decisions are kept).
 
-    1. Offsets of the accepted reports from the track ``out`` (:func:`timestamp_offsets`,
-       smoothed residuals): a first estimate that seeds step 3.
+    1. Offsets of the accepted reports from the track ``out`` (smoothed residuals,
+       :meth:`scores` then :meth:`seed`): a first estimate that seeds step 3.
     2. Report noise re-estimated from the accepted reports only (:func:`position_noise`;
        the first estimate also saw the outliers); for vessels with offsets on the corrected
        times, with the timestamp-sigma floor ``sigma_time_fine_s``.
     3. All vessels filtered with the steady acceleration PSD ``q_accel_steady`` and the
        offsets in the measurement model; the offsets estimated again from that track
        (leave-one-out residuals; the steady track follows single glitches less) -- this
-       estimate decides whether the file shows offsets at all -- up to ``offset_passes``
-       times, re-filtering the vessels whose offsets changed (noise re-estimated).
-    4. All vessels filtered with ``q_accel`` and the same offsets; per vessel, the track
-       (``q_accel`` or ``q_accel_steady``) whose reports have the larger prediction
-       log-likelihood is kept (a two-model choice per vessel: steady ships vs manoeuvring
-       craft).
+       estimate decides whether the data show offsets at all -- up to ``offset_passes``
+       times (:meth:`update_offsets`, :meth:`rerun`), re-filtering the vessels whose
+       offsets changed (noise re-estimated).
+    4. All vessels filtered with ``q_accel`` and the same offsets (:meth:`finish`); per
+       vessel, the track (``q_accel`` or ``q_accel_steady``) whose reports have the larger
+       prediction log-likelihood is kept (steady ships vs manoeuvring craft).
     """
-    vs, ts, zs, us, sig = rows.vessel, rows.t, rows.z, rows.use, rows.sig
-    usable = us & (out.kind == OutlierKind.NONE) & (out.segment >= 0)
-    # first estimate from the (manoeuvring, coarse-noise) track: the smoothed residual
-    off = timestamp_offsets(
-        zs, out.state, pos_cov(out.std), sig, np.zeros(ts.size), usable, cfg, leave_one_out=False
-    )
-    uv, inv_v = np.unique(vs, return_inverse=True)
 
-    def per_vessel(mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    def __init__(self, rows: Rows, out: KernelOutputs, cfg: AisTrackerConfig) -> None:
+        self.rows, self.out, self.cfg = rows, out, cfg
+        self.usable = rows.use & (out.kind == OutlierKind.NONE) & (out.segment >= 0)
+        self.uv, self.inv_v = np.unique(rows.vessel, return_inverse=True)
+        self.off = np.zeros(rows.t.size)
+        self.new_off = self.off
+        self.sig_f = rows.sig
+        self.force_f = rows.force.copy()
+        self.force_f[self.usable] = Force.ACCEPT  # the decisions of the passes before
+        self.force_f[rows.use & (out.kind == OutlierKind.IMPLAUSIBLE_JUMP)] = Force.REJECT
+        self.steady = replace(cfg, q_accel=cfg.q_accel_steady or cfg.q_accel)
+        self.alt = out
+        # first estimate from the (manoeuvring, coarse-noise) track: the smoothed residual
+        self._scores = offset_scores(
+            rows.z,
+            out.state,
+            pos_cov(out.std),
+            rows.sig,
+            self.off,
+            self.usable,
+            cfg,
+            leave_one_out=False,
+        )
+
+    def scores(self) -> OffsetScores:
+        """The offset scores whose prior the next step needs."""
+        return self._scores
+
+    def _per_vessel(self, mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
         """Rows of the vessels with any row in ``mask``."""
-        return (np.bincount(inv_v, mask, uv.size) > 0)[inv_v]
+        return (np.bincount(self.inv_v, mask, self.uv.size) > 0)[self.inv_v]
 
-    def noise(off: FloatArray) -> FloatArray:
-        """Report noise again, from the accepted reports only (the first estimate also
-        saw the outliers) and, for vessels with offsets, on the corrected times."""
-        moved = per_vessel(off != 0.0)
+    def _noise(self) -> FloatArray:
+        """Report noise again, from the accepted reports only and, for vessels with
+        offsets, on the corrected times."""
+        cfg, rows, off = self.cfg, self.rows, self.off
+        moved = self._per_vessel(off != 0.0)
         if cfg.estimate_noise:
             fine = replace(cfg, sigma_time_min_s=cfg.sigma_time_fine_s)
-            sig_f = position_noise(vs, ts - off, zs, usable, fine)
-            sig_f[:, 1] = np.where(moved, np.minimum(sig_f[:, 1], sig[:, 1]), sig[:, 1])
+            sig_f = position_noise(rows.vessel, rows.t - off, rows.z, self.usable, fine)
+            sig_f[:, 1] = np.where(moved, np.minimum(sig_f[:, 1], rows.sig[:, 1]), rows.sig[:, 1])
         else:
-            sig_f = sig.copy()
+            sig_f = rows.sig.copy()
             sig_f[moved, 1] = cfg.sigma_time_fine_s
         return sig_f
 
-    sig_f = noise(off)
-    force_f = rows.force.copy()
-    force_f[usable] = Force.ACCEPT  # the outlier decisions of the passes before are kept
-    force_f[us & (out.kind == OutlierKind.IMPLAUSIBLE_JUMP)] = Force.REJECT
+    def _run(self, sub: NDArray[np.bool_], c: AisTrackerConfig) -> KernelOutputs:
+        rows = self.rows.take(sub, sig=self.sig_f, force=self.force_f, toff=self.off)
+        return run_rows(rows, c)
 
-    def run(sub: NDArray[np.bool_], c: AisTrackerConfig) -> KernelOutputs:
-        return run_rows(rows.take(sub, sig=sig_f, force=force_f, toff=off), c)
+    def _loo_scores(self) -> OffsetScores:
+        """Leave-one-out offset scores from the steady track."""
+        alt = self.alt
+        return offset_scores(
+            self.rows.z, alt.state, pos_cov(alt.std), self.sig_f, self.off, self.usable, self.cfg
+        )
 
-    steady = replace(cfg, q_accel=cfg.q_accel_steady or cfg.q_accel)
-    alt = run(np.ones(ts.size, dtype=bool), steady)
-    for _ in range(cfg.offset_passes):
-        # offsets again from the steady track (it follows single glitches less; this
-        # estimate, not the first, decides whether the file shows offsets at all)
-        new = timestamp_offsets(zs, alt.state, pos_cov(alt.std), sig_f, off, usable, cfg)
-        again = per_vessel(new != off)
-        if not again.any():
+    def seed(self, prior: FloatArray | None) -> None:
+        """Steps 1-3: seed offsets under ``prior``, noise, the steady track and its
+        leave-one-out scores."""
+        self.off = apply_offsets(self._scores, prior, self.cfg)
+        self.sig_f = self._noise()
+        self.alt = self._run(np.ones(self.rows.t.size, dtype=bool), self.steady)
+        self._scores = self._loo_scores()
+
+    def update_offsets(self, prior: FloatArray | None) -> bool:
+        """Offsets again under ``prior``; True if any vessel's offsets changed."""
+        self.new_off = apply_offsets(self._scores, prior, self.cfg)
+        return bool(np.any(self.new_off != self.off))
+
+    def rerun(self, more: bool) -> None:
+        """Take the new offsets, re-filter the vessels whose offsets changed; ``more``:
+        another offset pass follows (its scores are computed)."""
+        again = self._per_vessel(self.new_off != self.off)
+        self.off = self.new_off
+        self.sig_f = self._noise()
+        if again.any():
+            merge_outputs(self.alt, again, self._run(again, self.steady))
+        if more:
+            self._scores = self._loo_scores()
+
+    def finish(self) -> tuple[KernelOutputs, FloatArray]:
+        """Step 4; returns the kernel outputs and the offsets (s) of every row."""
+        cfg, alt, inv_v, nv = self.cfg, self.alt, self.inv_v, self.uv.size
+        # vessels the steady model fits badly (mean NIS above steady_nis_ratio x its 2 dof)
+        # are filtered with q_accel too; per vessel the track whose reports have the larger
+        # prediction log-likelihood is kept
+        fin = np.isfinite(alt.nis)
+        n_fin = np.maximum(np.bincount(inv_v[fin], None, nv), 1)
+        mean_nis = np.bincount(inv_v[fin], alt.nis[fin], nv) / n_fin
+        cand = (mean_nis > 2.0 * cfg.steady_nis_ratio)[inv_v]
+        if cfg.q_accel_steady > 0 and cand.any():
+            # the q_accel track: the passes before for vessels without offsets (same model
+            # but for the noise estimate), else filtered again with the offsets
+            hi = KernelOutputs._make(a.copy() for a in self.out)
+            moved = self._per_vessel(self.off != 0.0)
+            if (cand & moved).any():
+                merge_outputs(hi, cand & moved, self._run(cand & moved, cfg))
+            fin = cand & np.isfinite(hi.loglik) & np.isfinite(alt.loglik)
+            ll = np.bincount(inv_v[fin], hi.loglik[fin], nv)
+            ll_alt = np.bincount(inv_v[fin], alt.loglik[fin], nv)
+            take = cand & (ll > ll_alt)[inv_v]
+            merge_outputs(alt, take, KernelOutputs._make(a[take] for a in hi))
+        return alt, self.off
+
+
+def drive(apply: Callable[[Callable[[Refinement], Any]], list[Any]], cfg: AisTrackerConfig) -> None:
+    """Run the refinement pass on vessel groups held elsewhere, step by step.
+
+    ``apply(f)`` calls ``f`` on the :class:`Refinement` of every group (in memory, from a
+    spill file, or on a cluster; the groups' states must be kept) and returns the results
+    in group order. Between steps the offset prior is estimated from the counts of all
+    groups (:func:`estimate_prior`), so the result is that of one table.
+    """
+
+    def prior() -> FloatArray | None:
+        n_ident = sum(int(x) for x in apply(lambda r: np.count_nonzero(r.scores().ident)))
+
+        def counts(p: FloatArray) -> NDArray[np.int64]:
+            parts = apply(lambda r: prior_counts(r.scores(), p))
+            return np.sum(np.asarray(parts, dtype=np.int64), axis=0)
+
+        return estimate_prior(counts, n_ident, cfg)
+
+    p = prior()
+    apply(lambda r: r.seed(p))
+    for k in range(cfg.offset_passes):
+        p = prior()
+        if not any(apply(functools.partial(Refinement.update_offsets, prior=p))):
             break
-        off = new
-        sig_f = noise(off)
-        merge_outputs(alt, again, run(again, steady))
-    # vessels the steady model fits badly (mean NIS above steady_nis_ratio x its 2 dof)
-    # are filtered with q_accel too; per vessel the track whose reports have the larger
-    # prediction log-likelihood is kept
-    fin = np.isfinite(alt.nis)
-    n_fin = np.maximum(np.bincount(inv_v[fin], None, uv.size), 1)
-    mean_nis = np.bincount(inv_v[fin], alt.nis[fin], uv.size) / n_fin
-    cand = (mean_nis > 2.0 * cfg.steady_nis_ratio)[inv_v]
-    if cfg.q_accel_steady > 0 and cand.any():
-        # the q_accel track: the passes before for vessels without offsets (same model
-        # but for the noise estimate), else filtered again with the offsets
-        hi = KernelOutputs(*(a.copy() for a in out))
-        moved = per_vessel(off != 0.0)
-        if (cand & moved).any():
-            merge_outputs(hi, cand & moved, run(cand & moved, cfg))
-        fin = cand & np.isfinite(hi.loglik) & np.isfinite(alt.loglik)
-        ll = np.bincount(inv_v[fin], hi.loglik[fin], uv.size)
-        ll_alt = np.bincount(inv_v[fin], alt.loglik[fin], uv.size)
-        take = cand & (ll > ll_alt)[inv_v]
-        merge_outputs(alt, take, KernelOutputs(*(a[take] for a in hi)))
-    return alt, off
+        apply(functools.partial(Refinement.rerun, more=k + 1 < cfg.offset_passes))
+
+
+def refine_pass(
+    rows: Rows, out: KernelOutputs, cfg: AisTrackerConfig
+) -> tuple[KernelOutputs, FloatArray]:
+    """The refinement pass over one table (see :class:`Refinement`)."""
+    ref = Refinement(rows, out, cfg)
+    drive(lambda f: [f(ref)], cfg)
+    return ref.finish()
+
+
+def refine_groups(
+    groups: Sequence[Refinement], cfg: AisTrackerConfig
+) -> list[tuple[KernelOutputs, FloatArray]]:
+    """The refinement pass over vessel groups held in memory (same result as one table)."""
+    drive(lambda f: [f(g) for g in groups], cfg)
+    return [g.finish() for g in groups]

@@ -1,5 +1,11 @@
 """Track many vessels at once in local planes: :func:`track_vessels` (sorting, noise
-estimate, kernel, revisit passes, refinement pass, segment numbering)."""
+estimate, kernel, revisit passes, refinement pass, segment numbering).
+
+The steps are public for tables split into vessel groups (:func:`track_vessel_groups`, and
+the bounded-memory and Dask pipelines of :mod:`seatrack.io.ais`): :func:`prepare_rows`,
+:func:`first_track`, the refinement pass (:mod:`~seatrack.filters.ais.refine`, whose offset
+prior is shared by all groups) and :func:`track_states`. The result does not depend on how
+the vessels are grouped."""
 
 from __future__ import annotations
 
@@ -9,14 +15,22 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from seatrack.filters.ais.config import NX, AisTrackerConfig
-from seatrack.filters.ais.kernel import Force
+from seatrack.filters.ais.kernel import Force, KernelOutputs
 from seatrack.filters.ais.noise import position_noise
 from seatrack.filters.ais.plausibility import Rows, revisit, run_rows
-from seatrack.filters.ais.refine import refine_pass
+from seatrack.filters.ais.refine import Refinement, refine_groups
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["TrackStates", "track_vessels"]
+__all__ = [
+    "TrackStates",
+    "VesselInputs",
+    "track_vessels",
+    "track_vessel_groups",
+    "prepare_rows",
+    "first_track",
+    "track_states",
+]
 
 
 @dataclass(frozen=True)
@@ -35,7 +49,8 @@ class TrackStates:
         0 = none, else a key of :data:`OUTLIER_KINDS` (1 outside the gate and implausible,
         2 stale position, 3 implausible jump across a long gap).
     segment : ndarray of int (N,)
-        Track segment id (splits at gaps / re-initialisations); -1 without estimate.
+        Number of the track segment within its vessel, 1, 2, ... in time order (tracks
+        split at gaps / re-initialisations); -1 without estimate.
     nis : ndarray (N,)
         NIS of the report against the prediction (NaN for first reports / unused rows).
     time_offset : ndarray (N,)
@@ -50,6 +65,99 @@ class TrackStates:
     segment: NDArray[np.int64]
     nis: FloatArray
     time_offset: FloatArray
+
+
+@dataclass(frozen=True)
+class VesselInputs:
+    """Reports of many vessels, any row order (see :func:`track_vessels` for the fields)."""
+
+    vessel: NDArray[np.int64]
+    t: FloatArray
+    xy: FloatArray
+    use: NDArray[np.bool_] | None = None
+    v0: FloatArray | None = None
+    sog: FloatArray | None = None
+    cog: FloatArray | None = None
+
+
+def prepare_rows(inputs: VesselInputs, cfg: AisTrackerConfig) -> tuple[Rows, NDArray[np.int64]]:
+    """Rows sorted by (vessel, time) (stable: equal times keep their input order) with the
+    estimated report noise, and the sort order."""
+    vid = np.asarray(inputs.vessel, dtype=np.int64)
+    tt = np.asarray(inputs.t, dtype=np.float64)
+    z = np.asarray(inputs.xy, dtype=np.float64)
+    n = tt.size
+    if z.shape != (n, 2) or vid.shape != (n,):
+        raise ValueError(f"vessel (N,), t (N,) and xy (N, 2) needed; got {vid.shape}, {z.shape}")
+    if not (np.isfinite(tt).all() and np.isfinite(z).all()):
+        raise ValueError("times and positions must be finite (reject bad rows first)")
+
+    def opt(a: ArrayLike | None, shape: tuple[int, ...], fill: float) -> NDArray:
+        return np.full(shape, fill) if a is None else np.asarray(a, dtype=np.float64)
+
+    u = np.ones(n, dtype=bool) if inputs.use is None else np.asarray(inputs.use, dtype=bool)
+    order = np.lexsort((tt, vid))
+    vs, ts, zs, us = vid[order], tt[order], z[order], u[order]
+    vo = np.ascontiguousarray(opt(inputs.v0, (n, 2), np.nan)[order])
+    known: NDArray[np.bool_] = np.asarray(np.isfinite(vo).all(axis=1))
+    vo[~known] = 0.0
+    if cfg.estimate_noise:
+        sig = position_noise(vs, ts, zs, us, cfg)
+    else:
+        sig = np.zeros((n, 2))
+        sig[:, 0] = cfg.sigma_pos_m
+    rows = Rows(
+        vs,
+        ts,
+        zs,
+        us,
+        vo,
+        known,
+        opt(inputs.sog, (n,), np.nan)[order],
+        opt(inputs.cog, (n,), np.nan)[order],
+        sig,
+        np.full(n, Force.FREE, dtype=np.int8),
+        np.zeros(n),
+    )
+    return rows, order
+
+
+def first_track(rows: Rows, cfg: AisTrackerConfig) -> KernelOutputs:
+    """The kernel and the revisit passes (``rows.force`` is updated)."""
+    out = run_rows(rows, cfg)
+    revisit(rows, out, cfg)
+    return out
+
+
+def track_states(
+    rows: Rows, out: KernelOutputs, toff: FloatArray, order: NDArray[np.int64]
+) -> TrackStates:
+    """:class:`TrackStates` in input order from the outputs over the sorted rows; segments
+    numbered 1, 2, ... within each vessel in time order."""
+    n = order.size
+    seg = out.segment.copy()
+    has = np.flatnonzero(seg >= 0)
+    if has.size:
+        ids, first, which = np.unique(seg[has], return_index=True, return_inverse=True)
+        by_first = np.argsort(first, kind="stable")  # segments in (vessel, time) order
+        ves = rows.vessel[has[first[by_first]]]
+        start = np.r_[True, ves[1:] != ves[:-1]]
+        pos = np.arange(ids.size)
+        num = pos - np.maximum.accumulate(np.where(start, pos, 0)) + 1
+        rank = np.empty(ids.size, dtype=np.int64)
+        rank[by_first] = num
+        seg[has] = rank[which.ravel()]
+    inv = np.empty_like(order)
+    inv[order] = np.arange(n)
+    return TrackStates(
+        out.state[inv],
+        out.std[inv, :NX],
+        out.kind[inv] > 0,
+        out.kind[inv],
+        seg[inv],
+        out.nis[inv],
+        np.asarray(toff, dtype=np.float64)[inv],
+    )
 
 
 def track_vessels(
@@ -89,46 +197,28 @@ def track_vessels(
     TrackStates
         In the input row order.
     """
+    inputs = VesselInputs(
+        *(None if a is None else np.asarray(a) for a in (vessel, t, xy, use, v0, sog, cog))  # type: ignore[arg-type]
+    )
+    return track_vessel_groups([inputs], config)[0]
+
+
+def track_vessel_groups(
+    groups: list[VesselInputs], config: AisTrackerConfig | None = None
+) -> list[TrackStates]:
+    """:func:`track_vessels` of vessel groups held in memory (each vessel in one group);
+    the result is the same as for one table of all groups (the offset prior is shared)."""
     cfg = config or AisTrackerConfig()
-    vid = np.asarray(vessel, dtype=np.int64)
-    tt = np.asarray(t, dtype=np.float64)
-    z = np.asarray(xy, dtype=np.float64)
-    n = tt.size
-    if z.shape != (n, 2) or vid.shape != (n,):
-        raise ValueError(f"vessel (N,), t (N,) and xy (N, 2) needed; got {vid.shape}, {z.shape}")
-    if not (np.isfinite(tt).all() and np.isfinite(z).all()):
-        raise ValueError("times and positions must be finite (reject bad rows first)")
-    u = np.ones(n, dtype=bool) if use is None else np.asarray(use, dtype=bool)
-    sg = np.full(n, np.nan) if sog is None else np.asarray(sog, dtype=np.float64)
-    cg = np.full(n, np.nan) if cog is None else np.asarray(cog, dtype=np.float64)
-    vv = np.full((n, 2), np.nan) if v0 is None else np.asarray(v0, dtype=np.float64)
-    order = np.lexsort((tt, vid))
-    ts, zs, us, vs_ = tt[order], z[order], u[order], vid[order]
-    vo = np.ascontiguousarray(vv[order])
-    known: NDArray[np.bool_] = np.asarray(np.isfinite(vo).all(axis=1))
-    vo[~known] = 0.0
-    sgs = sg[order]
-    cgs = cg[order]
-    force = np.full(n, Force.FREE, dtype=np.int8)
-    if cfg.estimate_noise:
-        sig = position_noise(vs_, ts, zs, us, cfg)
+    prepared = [prepare_rows(g, cfg) for g in groups]
+    outs = [first_track(rows, cfg) for rows, _ in prepared]
+    if cfg.refine:
+        live = [k for k, (rows, _) in enumerate(prepared) if rows.t.size]
+        refs = [Refinement(prepared[k][0], outs[k], cfg) for k in live]
+        done = dict(zip(live, refine_groups(refs, cfg), strict=True))
     else:
-        sig = np.zeros((n, 2))
-        sig[:, 0] = cfg.sigma_pos_m
-    toff = np.zeros(n)
-    rows = Rows(vs_, ts, zs, us, vo, known, sgs, cgs, sig, force, toff)
-    out = run_rows(rows, cfg)
-    revisit(rows, out, cfg)
-    if cfg.refine and n:
-        out, toff = refine_pass(rows, out, cfg)
-    # segment ids 1, 2, ... in order of (vessel, time)
-    seg = out.segment
-    has = seg >= 0
-    ids, first, which = np.unique(seg[has], return_index=True, return_inverse=True)
-    rank = np.empty(ids.size, dtype=np.int64)
-    rank[np.argsort(first)] = np.arange(1, ids.size + 1)
-    seg[has] = rank[which]
-    inv = np.empty_like(order)
-    inv[order] = np.arange(n)
-    out_x, out_std, out_flag, out_seg, out_nis, _ = (a[inv] for a in out)
-    return TrackStates(out_x, out_std[:, :NX], out_flag > 0, out_flag, out_seg, out_nis, toff[inv])
+        done = {}
+    result = []
+    for k, (rows, order) in enumerate(prepared):
+        out, toff = done.get(k, (outs[k], np.zeros(rows.t.size)))
+        result.append(track_states(rows, out, toff, order))
+    return result

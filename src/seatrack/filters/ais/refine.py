@@ -5,7 +5,7 @@ The pass is a :class:`Refinement` driven in steps, because the prior of the time
 offsets is estimated from *all* vessels together: a table split into vessel groups (bounded
 memory, processes, a Dask cluster) runs each step on every group and estimates the prior
 between steps from the counts of all groups (:func:`drive`), which gives the same result as
-one table. :func:`refine_pass` drives one table.
+one table. :func:`refine_pass` drives one table, :func:`refine_groups` groups in memory.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from __future__ import annotations
 import functools
 from collections.abc import Callable, Sequence
 from dataclasses import replace
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -33,7 +33,15 @@ from seatrack.filters.ais.plausibility import Rows, merge_outputs, run_rows
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["Refinement", "refine_pass", "drive"]
+__all__ = [
+    "GroupRunner",
+    "InMemory",
+    "Refinement",
+    "drive",
+    "n_ident",
+    "refine_groups",
+    "refine_pass",
+]
 
 
 class Refinement:
@@ -162,31 +170,50 @@ class Refinement:
         return alt, self.off
 
 
-def drive(apply: Callable[[Callable[[Refinement], Any]], list[Any]], cfg: AisTrackerConfig) -> None:
-    """Run the refinement pass on vessel groups held elsewhere, step by step.
+class GroupRunner(Protocol):
+    """Vessel groups whose :class:`Refinement` states are held somewhere (memory, spill
+    files, a cluster): :meth:`each` calls a function on every state (which it keeps, with
+    any change) and returns the results in group order; :meth:`counts` is the sum of
+    :func:`prior_counts` of the current scores of all groups under a prior."""
 
-    ``apply(f)`` calls ``f`` on the :class:`Refinement` of every group (in memory, from a
-    spill file, or on a cluster; the groups' states must be kept) and returns the results
-    in group order. Between steps the offset prior is estimated from the counts of all
-    groups (:func:`estimate_prior`), so the result is that of one table.
-    """
+    def each(self, f: Callable[[Refinement], Any]) -> list[Any]: ...
+
+    def counts(self, prior: FloatArray) -> NDArray[np.int64]: ...
+
+
+class InMemory:
+    """:class:`GroupRunner` of states held in a list."""
+
+    def __init__(self, groups: Sequence[Refinement]) -> None:
+        self.groups = list(groups)
+
+    def each(self, f: Callable[[Refinement], Any]) -> list[Any]:
+        return [f(g) for g in self.groups]
+
+    def counts(self, prior: FloatArray) -> NDArray[np.int64]:
+        parts = [prior_counts(g.scores(), prior) for g in self.groups]
+        return np.sum(np.asarray(parts, dtype=np.int64).reshape(len(parts), -1), axis=0)
+
+
+def n_ident(r: Refinement) -> int:
+    """Number of identifiable reports of a group's current scores."""
+    return int(np.count_nonzero(r.scores().ident))
+
+
+def drive(groups: GroupRunner, cfg: AisTrackerConfig) -> None:
+    """Run the refinement pass on vessel groups, step by step (not the last step,
+    :meth:`Refinement.finish`). Between steps the offset prior is estimated from the integer
+    counts of all groups (:func:`estimate_prior`), so the result is that of one table."""
 
     def prior() -> FloatArray | None:
-        n_ident = sum(int(x) for x in apply(lambda r: np.count_nonzero(r.scores().ident)))
+        return estimate_prior(groups.counts, sum(groups.each(n_ident)), cfg)
 
-        def counts(p: FloatArray) -> NDArray[np.int64]:
-            parts = apply(lambda r: prior_counts(r.scores(), p))
-            return np.sum(np.asarray(parts, dtype=np.int64), axis=0)
-
-        return estimate_prior(counts, n_ident, cfg)
-
-    p = prior()
-    apply(lambda r: r.seed(p))
+    groups.each(functools.partial(Refinement.seed, prior=prior()))
     for k in range(cfg.offset_passes):
         p = prior()
-        if not any(apply(functools.partial(Refinement.update_offsets, prior=p))):
+        if not any(groups.each(functools.partial(Refinement.update_offsets, prior=p))):
             break
-        apply(functools.partial(Refinement.rerun, more=k + 1 < cfg.offset_passes))
+        groups.each(functools.partial(Refinement.rerun, more=k + 1 < cfg.offset_passes))
 
 
 def refine_pass(
@@ -194,7 +221,7 @@ def refine_pass(
 ) -> tuple[KernelOutputs, FloatArray]:
     """The refinement pass over one table (see :class:`Refinement`)."""
     ref = Refinement(rows, out, cfg)
-    drive(lambda f: [f(ref)], cfg)
+    drive(InMemory([ref]), cfg)
     return ref.finish()
 
 
@@ -202,5 +229,5 @@ def refine_groups(
     groups: Sequence[Refinement], cfg: AisTrackerConfig
 ) -> list[tuple[KernelOutputs, FloatArray]]:
     """The refinement pass over vessel groups held in memory (same result as one table)."""
-    drive(lambda f: [f(g) for g in groups], cfg)
+    drive(InMemory(groups), cfg)
     return [g.finish() for g in groups]

@@ -10,9 +10,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from seatrack.filters.ais.config import AisTrackerConfig
-from seatrack.filters.ais.tracker import track_vessels
+from seatrack.filters.ais.tracker import TrackStates, VesselInputs, track_vessel_groups
 from seatrack.geometry import (
     KNOT_MPS,
+    LocalFrame,
     bearing,
     local_frames,
     local_to_geodetic,
@@ -22,7 +23,13 @@ from seatrack.geometry import (
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["AisTracks", "track_reports"]
+__all__ = [
+    "AisTracks",
+    "PreparedReports",
+    "prepare_reports",
+    "track_reports",
+    "tracks_from_states",
+]
 
 
 @dataclass(frozen=True)
@@ -91,8 +98,24 @@ def track_reports(
         False withholds a row from the filter (it still gets the track estimate at its
         time) -- for hold-out tests.
     """
-    cfg = config or AisTrackerConfig()
-    n = len(reports)
+    prep = prepare_reports(reports, use)
+    st = track_vessel_groups([prep.inputs], config or AisTrackerConfig())[0]
+    return tracks_from_states(prep, st)
+
+
+@dataclass(frozen=True)
+class PreparedReports:
+    """Tracker inputs of a report table: the usable rows ``idx``, their local frames and
+    :class:`~seatrack.filters.ais.tracker.VesselInputs` (SOG/COG in the planes)."""
+
+    n: int
+    idx: NDArray[np.int64]
+    frame: LocalFrame
+    inputs: VesselInputs
+
+
+def prepare_reports(reports: Any, use: ArrayLike | None = None) -> PreparedReports:
+    """Local planes per vessel and the tracker inputs of the usable rows of ``reports``."""
     ok = reports.valid
     frame = local_frames(reports.mmsi, reports.lat, reports.lon, ok)
     idx = np.flatnonzero(ok)
@@ -104,16 +127,16 @@ def track_reports(
     gam0 = north_convergence(reports.lat[idx], reports.lon[idx], frame.lat0[idx], frame.lon0[idx])
     cog_plane = cog + gam0
     v0 = np.stack([sog * np.sin(cog_plane), sog * np.cos(cog_plane)], axis=-1)
-    st = track_vessels(
-        reports.mmsi[idx],
-        reports.t[idx],
-        frame.enu[idx, :2],
-        cfg,
-        use=u,
-        v0=v0,
-        sog=sog,
-        cog=cog_plane,
+    inputs = VesselInputs(
+        reports.mmsi[idx], reports.t[idx], frame.enu[idx, :2], u, v0, sog, cog_plane
     )
+    return PreparedReports(len(reports), idx, frame, inputs)
+
+
+def tracks_from_states(prep: PreparedReports, st: TrackStates) -> AisTracks:
+    """:class:`AisTracks` of all rows from the states of the usable ones: WGS84 positions
+    and courses referred to true North at the vessel."""
+    n, idx, frame = prep.n, prep.idx, prep.frame
 
     def full(a: NDArray, fill: Any = np.nan, dtype: Any = float) -> NDArray:
         out = np.full((n,) + a.shape[1:], fill, dtype=dtype)

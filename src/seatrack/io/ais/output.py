@@ -31,6 +31,8 @@ __all__ = [
     "format_times",
     "track_columns",
     "tracks_csv_bytes",
+    "table_csv_bytes",
+    "write_table",
     "tracks_table",
     "write_tracks",
     "write_tracks_csv",
@@ -157,21 +159,6 @@ def _quote(text: str) -> str:
     return text
 
 
-def _labels(values: NDArray, labels: list[str]) -> Any:
-    """Text column from small integer codes into ``labels`` (CSV-quoted once per label)."""
-    import pyarrow as pa
-
-    dic = pa.array([_quote(s) for s in labels], pa.string())
-    return pa.DictionaryArray.from_arrays(pa.array(values, pa.int32()), dic).cast(pa.string())
-
-
-def _ints(v: NDArray[np.int64], missing: NDArray[np.bool_]) -> Any:
-    import pyarrow as pa
-    import pyarrow.compute as pc
-
-    return pc.cast(pa.array(v, pa.int64(), mask=missing), pa.string())
-
-
 def _prepare(r: AisReports, columns: dict[str, NDArray]) -> tuple[AisReports, dict[str, NDArray]]:
     """Rows and columns in output order."""
     order = output_order(r)
@@ -180,34 +167,59 @@ def _prepare(r: AisReports, columns: dict[str, NDArray]) -> tuple[AisReports, di
 
 def tracks_csv_bytes(r: AisReports, columns: dict[str, NDArray], header: bool = True) -> bytes:
     """TRACKS CSV text of the rows of ``r`` (in output order) and their track ``columns``
-    (see :func:`seatrack.commands.ais.track_columns`: one value per row of ``r``)."""
+    (:func:`track_columns`: one value per row of ``r``)."""
+    return table_csv_bytes(tracks_table(r, columns), header)
+
+
+def _text(col: Any) -> Any:
+    """A string column with every distinct value CSV-quoted once (null stays null)."""
+    import pyarrow as pa
+
+    enc = col.dictionary_encode()
+    if isinstance(enc, pa.ChunkedArray):
+        enc = pa.concat_arrays(enc.chunks) if enc.num_chunks else pa.array([], enc.type)
+    dic = pa.array([None if v is None else _quote(v) for v in enc.dictionary.to_pylist()])
+    return pa.DictionaryArray.from_arrays(enc.indices, dic.cast(pa.string())).cast(pa.string())
+
+
+def _numpy(col: Any, dtype: Any, fill: Any) -> NDArray:
+    return np.asarray(col.fill_null(fill).to_numpy(zero_copy_only=False), dtype=dtype)
+
+
+def table_csv_bytes(table: Any, header: bool = True) -> bytes:
+    """CSV text of a TRACKS table (:func:`tracks_table`): fixed decimals of
+    :data:`TRACK_COLUMNS` (raw positions 6), ``outlier`` 0/1, times ISO 8601, missing
+    values empty; formatted column by column in pyarrow."""
     import pyarrow as pa
     import pyarrow.compute as pc
 
-    r, cols = _prepare(r, columns)
-    n = len(r)
-    parts = [_ints(r.mmsi, r.mmsi < 0), _times(r.t)]
+    n = table.num_rows
+    ms = pc.cast(table.column("time_utc").cast(pa.timestamp("ms")), pa.int64())
+    t = np.where(
+        ms.is_null().to_numpy(zero_copy_only=False), np.nan, _numpy(ms, np.float64, 0) / 1000.0
+    )
+    parts = [pc.cast(table.column("mmsi"), pa.string()), _times(t)]
+    for c, d in TRACK_COLUMNS.items():
+        parts.append(_fixed(_numpy(table.column(c), np.float64, np.nan), d))
+    parts.append(pc.cast(pc.cast(table.column("outlier"), pa.int8()), pa.string()))
+    parts.append(_text(table.column("outlier_reason")))
+    parts.append(pc.cast(table.column("segment"), pa.string()))
     parts += [
-        _fixed(cols[c], d) if c in cols else pa.nulls(n, pa.string())
-        for c, d in TRACK_COLUMNS.items()
+        _fixed(_numpy(table.column(c), np.float64, np.nan), 6) for c in ("raw_lat", "raw_lon")
     ]
-    outlier = np.asarray(cols.get("outlier", np.zeros(n, bool)), dtype=bool)
-    parts.append(pc.cast(pa.array(outlier.astype(np.int8)), pa.string()))
-    kind = np.asarray(cols.get("outlier_kind", np.zeros(n, np.int8)), dtype=np.int64)
-    parts.append(_labels(kind, _OUTLIER_LABELS))
-    seg = np.asarray(cols.get("segment", np.full(n, -1)), dtype=np.int64)
-    parts.append(_ints(seg, seg < 0))
-    parts += [_fixed(r.lat, 6), _fixed(r.lon, 6)]
-    parts.append(_labels(r.code.astype(np.int64), list(REASON_LABELS)))
-    parts.append(_labels(r.source, list(r.sources)))
-    parts.append(pc.cast(pa.array(r.line), pa.string()))
+    parts += [_text(table.column("reject_reason")), _text(table.column("source"))]
+    parts.append(pc.cast(table.column("line"), pa.string()))
+    parts = [p.combine_chunks() if isinstance(p, pa.ChunkedArray) else p for p in parts]
     rows = pc.binary_join_element_wise(*parts, ",", null_handling="replace", null_replacement="")
     rows = pc.binary_join_element_wise(rows, "", "\n").cast(pa.large_string())
-    if isinstance(rows, pa.ChunkedArray):
-        rows = pa.concat_arrays(rows.chunks) if rows.num_chunks else pa.array([], pa.large_string())
     offsets = np.frombuffer(rows.buffers()[1], dtype=np.int64)[rows.offset : rows.offset + n + 1]
     body = rows.buffers()[2].to_pybytes()[offsets[0] : offsets[-1]] if n else b""
     return ((",".join(HEADER) + "\n").encode() if header else b"") + body
+
+
+def write_table(writer: TracksWriter, table: Any) -> None:
+    """Append a TRACKS table (rows already in output order) to an open writer."""
+    writer.write_table(table)
 
 
 def tracks_table(r: AisReports, columns: dict[str, NDArray]) -> Any:
@@ -265,16 +277,19 @@ class TracksWriter(contextlib.AbstractContextManager["TracksWriter"]):
 
     def write(self, r: AisReports, columns: dict[str, NDArray]) -> None:
         """Append the rows of ``r`` (a group of whole vessels) in output order."""
+        self.write_table(tracks_table(r, columns))
+
+    def write_table(self, table: Any) -> None:
+        """Append a TRACKS table (:func:`tracks_table`, rows in output order)."""
         if self.format == "csv":
-            self._fh.write(tracks_csv_bytes(r, columns, header=False))
+            self._fh.write(table_csv_bytes(table, header=False))
         else:
             import pyarrow.parquet as pq
 
-            table = tracks_table(r, columns)
             if self._pq is None:
                 self._pq = pq.ParquetWriter(str(self._tmp), table.schema, compression="zstd")
             self._pq.write_table(table)
-        self.rows += len(r)
+        self.rows += table.num_rows
 
     def __exit__(
         self,

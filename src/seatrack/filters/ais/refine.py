@@ -57,7 +57,7 @@ class Refinement:
        offsets in the measurement model; the offsets estimated again from that track
        (leave-one-out residuals; the steady track follows single glitches less) -- this
        estimate decides whether the data show offsets at all -- up to ``offset_passes``
-       times (:meth:`update_offsets`, :meth:`rerun`), re-filtering the vessels whose
+       times (:meth:`update`), re-filtering the vessels whose
        offsets changed (noise re-estimated).
     4. All vessels filtered with ``q_accel`` and the same offsets (:meth:`finish`); per
        vessel, the track (``q_accel`` or ``q_accel_steady``) whose reports have the larger
@@ -69,7 +69,6 @@ class Refinement:
         self.usable = rows.use & (out.kind == OutlierKind.NONE) & (out.segment >= 0)
         self.uv, self.inv_v = np.unique(rows.vessel, return_inverse=True)
         self.off = np.zeros(rows.t.size)
-        self.new_off = self.off
         self.sig_f = rows.sig
         self.force_f = rows.force.copy()
         self.force_f[self.usable] = Force.ACCEPT  # the decisions of the passes before
@@ -129,21 +128,20 @@ class Refinement:
         self.alt = self._run(np.ones(self.rows.t.size, dtype=bool), self.steady)
         self._scores = self._loo_scores()
 
-    def update_offsets(self, prior: FloatArray | None) -> bool:
-        """Offsets again under ``prior``; True if any vessel's offsets changed."""
-        self.new_off = apply_offsets(self._scores, prior, self.cfg)
-        return bool(np.any(self.new_off != self.off))
-
-    def rerun(self, more: bool) -> None:
-        """Take the new offsets, re-filter the vessels whose offsets changed; ``more``:
-        another offset pass follows (its scores are computed)."""
-        again = self._per_vessel(self.new_off != self.off)
-        self.off = self.new_off
+    def update(self, prior: FloatArray | None, more: bool) -> bool:
+        """Offsets again under ``prior``; the vessels whose offsets changed are filtered
+        again (noise re-estimated); ``more``: another offset pass follows (its scores are
+        computed). Returns True if any offset changed."""
+        new = apply_offsets(self._scores, prior, self.cfg)
+        again = self._per_vessel(new != self.off)
+        if not again.any():
+            return False
+        self.off = new
         self.sig_f = self._noise()
-        if again.any():
-            merge_outputs(self.alt, again, self._run(again, self.steady))
+        merge_outputs(self.alt, again, self._run(again, self.steady))
         if more:
             self._scores = self._loo_scores()
+        return True
 
     def finish(self) -> tuple[KernelOutputs, FloatArray]:
         """Step 4; returns the kernel outputs and the offsets (s) of every row."""
@@ -180,6 +178,8 @@ class GroupRunner(Protocol):
 
     def counts(self, prior: FloatArray) -> NDArray[np.int64]: ...
 
+    def n_ident(self) -> int: ...
+
 
 class InMemory:
     """:class:`GroupRunner` of states held in a list."""
@@ -194,6 +194,9 @@ class InMemory:
         parts = [prior_counts(g.scores(), prior) for g in self.groups]
         return np.sum(np.asarray(parts, dtype=np.int64).reshape(len(parts), -1), axis=0)
 
+    def n_ident(self) -> int:
+        return sum(n_ident(g) for g in self.groups)
+
 
 def n_ident(r: Refinement) -> int:
     """Number of identifiable reports of a group's current scores."""
@@ -206,14 +209,13 @@ def drive(groups: GroupRunner, cfg: AisTrackerConfig) -> None:
     counts of all groups (:func:`estimate_prior`), so the result is that of one table."""
 
     def prior() -> FloatArray | None:
-        return estimate_prior(groups.counts, sum(groups.each(n_ident)), cfg)
+        return estimate_prior(groups.counts, groups.n_ident(), cfg)
 
     groups.each(functools.partial(Refinement.seed, prior=prior()))
     for k in range(cfg.offset_passes):
-        p = prior()
-        if not any(groups.each(functools.partial(Refinement.update_offsets, prior=p))):
+        step = functools.partial(Refinement.update, prior=prior(), more=k + 1 < cfg.offset_passes)
+        if not any(groups.each(step)):
             break
-        groups.each(functools.partial(Refinement.rerun, more=k + 1 < cfg.offset_passes))
 
 
 def refine_pass(

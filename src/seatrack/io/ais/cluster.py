@@ -34,13 +34,13 @@ from numpy.typing import NDArray
 
 from seatrack.filters.ais import AisTrackerConfig
 from seatrack.filters.ais.offsets import prior_counts
-from seatrack.filters.ais.refine import Refinement, drive
-from seatrack.filters.ais.tracker import first_track, prepare_rows, track_vessel_groups
+from seatrack.filters.ais.refine import Refinement, drive, n_ident
+from seatrack.filters.ais.tracker import track_vessel_groups
 from seatrack.filters.ais.tracks import prepare_reports, tracks_from_states
 from seatrack.io.ais.output import TracksWriter, track_columns, tracks_table
-from seatrack.io.ais.pipeline import RunSummary, _finish, _Group
+from seatrack.io.ais.pipeline import GroupState, RunSummary, finish_group, start_group
 from seatrack.io.ais.read import file_blocks
-from seatrack.io.ais.reports import AisReports, concat_reports, mark_duplicates
+from seatrack.io.ais.reports import AisReports, concat_reports
 from seatrack.io.atomic import OutputError, check_output_path
 
 __all__ = ["track_files_dask", "dask_client"]
@@ -69,24 +69,22 @@ def _partition(pieces: Sequence[AisReports], sources: tuple[str, ...]) -> AisRep
     return r
 
 
-def _start(pieces: Sequence[AisReports], sources: tuple[str, ...], cfg: AisTrackerConfig) -> _Group:
-    r = mark_duplicates(_partition(pieces, sources))
-    prep = prepare_reports(r)
-    rows, order = prepare_rows(prep.inputs, cfg)
-    out = first_track(rows, cfg)
-    ref = Refinement(rows, out, cfg) if cfg.refine and rows.t.size else None
-    # the first track is kept in the refinement (or recomputed by _finish without one)
-    return _Group(r, prep, rows, order, ref)
+def _start(pieces: Sequence[AisReports], sources: tuple[str, ...], cfg: AisTrackerConfig) -> Any:
+    return start_group(_partition(pieces, sources), cfg)
 
 
-def _step(grp: _Group, f: Callable[[Refinement], Any]) -> tuple[_Group, Any]:
+def _step(grp: Any, f: Callable[[Refinement], Any]) -> tuple[GroupState, Any]:
     return grp, (f(grp.ref) if grp.ref is not None else None)
 
 
-def _counts(grp: _Group, prior: NDArray[np.float64]) -> NDArray[np.int64]:
+def _counts(grp: Any, prior: NDArray[np.float64]) -> NDArray[np.int64]:
     if grp.ref is None:
         return np.zeros(prior.size, dtype=np.int64)
     return prior_counts(grp.ref.scores(), prior)
+
+
+def _n_ident(grp: Any) -> int:
+    return 0 if grp.ref is None else n_ident(grp.ref)
 
 
 def _first_keys(r: AisReports) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
@@ -103,11 +101,11 @@ def _first_keys(r: AisReports) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
     return vkey, key
 
 
-def _result(grp: _Group, cfg: AisTrackerConfig) -> tuple[Any, RunSummary]:
+def _result(grp: Any) -> tuple[Any, RunSummary]:
     """TRACKS table of a partition (with its order keys) and its summary."""
     import pyarrow as pa
 
-    tr = _finish(grp, cfg)
+    tr = finish_group(grp)
     summary = RunSummary()
     summary.add(grp.reports, tr)
     table = tracks_table(grp.reports, track_columns(tr))
@@ -158,6 +156,9 @@ class _DaskGroups:
     def counts(self, prior: NDArray[np.float64]) -> NDArray[np.int64]:
         parts = self.client.gather(self.client.map(_counts, self.states, prior=prior, pure=False))
         return np.sum(np.asarray(parts, dtype=np.int64).reshape(len(parts), -1), axis=0)
+
+    def n_ident(self) -> int:
+        return sum(self.client.gather(self.client.map(_n_ident, self.states, pure=False)))
 
 
 @contextlib.contextmanager
@@ -223,7 +224,7 @@ def track_files_dask(
     runner = _DaskGroups(client, states)
     if cfg.refine:
         drive(runner, cfg)
-    results = client.map(_result, runner.states, cfg=cfg, pure=False)
+    results = client.map(_result, runner.states, pure=False)
     results.append(piece(lambda fs: _no_mmsi([f[parts] for f in fs], sources), files))
     summary = _write_output(client, results, Path(out))
     for sk in skipped_parts:

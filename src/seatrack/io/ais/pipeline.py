@@ -34,7 +34,7 @@ from numpy.typing import NDArray
 
 from seatrack.filters.ais import AisTrackerConfig
 from seatrack.filters.ais.offsets import OffsetScores, prior_counts
-from seatrack.filters.ais.refine import Refinement, drive
+from seatrack.filters.ais.refine import InMemory, Refinement, drive
 from seatrack.filters.ais.tracker import (
     first_track,
     prepare_rows,
@@ -113,8 +113,11 @@ class RunSummary:
         self.codes += np.bincount(r.code, minlength=len(REASON_LABELS))
         self.vessels += int(np.unique(r.mmsi[valid]).size)
         has = tr.segment >= 0
-        pairs = np.unique(np.stack([r.mmsi[has], tr.segment[has]]), axis=1)
-        self.segments += int(pairs.shape[1])
+        if has.any():  # segments are numbered 1..K within each vessel
+            _, inv = np.unique(r.mmsi[has], return_inverse=True)
+            top = np.zeros(int(inv.max()) + 1, dtype=np.int64)
+            np.maximum.at(top, inv, tr.segment[has])
+            self.segments += int(top.sum())
         off = np.asarray(tr.time_offset_s, float)
         self.offsets += int(np.count_nonzero(np.isfinite(off) & (off != 0)))
         self.groups += 1
@@ -267,37 +270,71 @@ def _load(items: list[AisReports | Path], sources: tuple[str, ...]) -> AisReport
 
 
 @dataclass
-class _Group:
-    """One vessel group between the tracking steps."""
+class GroupState:
+    """One vessel group between the tracking steps: its reports and tracker inputs, and
+    either its refinement (``ref``) or, without one, its first track (``rows``, ``out``)."""
 
     reports: AisReports
     prep: PreparedReports
-    rows: Any
     order: NDArray[np.int64]
-    ref: Refinement | None
+    ref: Refinement | None = None
+    rows: Any = None
+    out: Any = None
+
+
+def start_group(r: AisReports, cfg: AisTrackerConfig) -> GroupState:
+    """Duplicates marked, tracker inputs, the first track and the refinement's start."""
+    r = mark_duplicates(r)
+    prep = prepare_reports(r)
+    rows, order = prepare_rows(prep.inputs, cfg)
+    out = first_track(rows, cfg)
+    if cfg.refine and rows.t.size:
+        return GroupState(r, prep, order, Refinement(rows, out, cfg))
+    return GroupState(r, prep, order, None, rows, out)
+
+
+def finish_group(grp: GroupState) -> AisTracks:
+    """The group's tracks (after the refinement steps)."""
+    if grp.ref is not None:
+        out, toff = grp.ref.finish()
+        rows = grp.ref.rows
+    else:
+        rows, out = grp.rows, grp.out
+        toff = np.zeros(rows.t.size)
+    return tracks_from_states(grp.prep, track_states(rows, out, toff, grp.order))
+
+
+def _ident_scores(ref: Refinement) -> OffsetScores:
+    sc = ref.scores()
+    keep = np.flatnonzero(sc.ident)
+    return OffsetScores(keep, sc.q[keep], np.ones(keep.size, bool), 0)
+
+
+def _dump(obj: Any, path: Path) -> None:
+    with path.open("wb") as fh:
+        pickle.dump(obj, fh, protocol=5)
+
+
+def _undump(path: Path) -> Any:
+    with path.open("rb") as fh:
+        return pickle.load(fh)
 
 
 class _Spilled:
-    """:class:`~seatrack.filters.ais.refine.GroupRunner` of groups pickled in a folder;
-    the identifiable scores of each group stay in memory for the prior counts."""
+    """:class:`~seatrack.filters.ais.refine.GroupRunner` of refinements pickled in a
+    folder; the identifiable scores of each group stay in memory for the prior counts."""
 
-    def __init__(self, paths: list[Path]) -> None:
-        self.paths = paths
-        self.q: list[OffsetScores] = []
+    def __init__(self, paths: list[Path], scores: list[OffsetScores]) -> None:
+        self.paths, self.q = paths, scores
 
     def each(self, f: Callable[[Refinement], Any]) -> list[Any]:
         out = []
-        self.q = []
-        for p in self.paths:
-            with p.open("rb") as fh:
-                grp: _Group = pickle.load(fh)
-            assert grp.ref is not None
-            out.append(f(grp.ref))
-            sc = grp.ref.scores()
-            keep = np.flatnonzero(sc.ident)
-            self.q.append(OffsetScores(keep, sc.q[keep], np.ones(keep.size, bool), 0))
-            with p.open("wb") as fh:
-                pickle.dump(grp, fh, protocol=5)
+        for k, p in enumerate(self.paths):
+            ref: Refinement = _undump(p)
+            out.append(f(ref))
+            self.q[k] = _ident_scores(ref)
+            _dump(ref, p)
+            del ref
         return out
 
     def counts(self, prior: NDArray[np.float64]) -> NDArray[np.int64]:
@@ -306,14 +343,8 @@ class _Spilled:
             total += prior_counts(sc, prior)
         return total
 
-
-def _finish(grp: _Group, cfg: AisTrackerConfig) -> AisTracks:
-    rows, order = grp.rows, grp.order
-    if grp.ref is not None:
-        out, toff = grp.ref.finish()
-    else:
-        out, toff = first_track(rows, cfg), np.zeros(rows.t.size)
-    return tracks_from_states(grp.prep, track_states(rows, out, toff, order))
+    def n_ident(self) -> int:
+        return sum(sc.rows.size for sc in self.q)
 
 
 def _track_groups(
@@ -325,32 +356,33 @@ def _track_groups(
 ) -> None:
     """Track the vessel groups (see the module docstring) and pass each to ``emit``."""
     if len(groups) == 1:  # one group: in memory
-        r = mark_duplicates(_load(groups[0], sources))
-        prep = prepare_reports(r)
-        st = track_vessel_groups([prep.inputs], cfg)[0]
-        emit(r, tracks_from_states(prep, st))
+        grp = start_group(_load(groups[0], sources), cfg)
+        if grp.ref is not None:
+            drive(InMemory([grp.ref]), cfg)
+        emit(grp.reports, finish_group(grp))
         return
-    paths, live = [], []
+    ctx, refs, scores = [], [], []
     for j, items in enumerate(groups):
-        r = mark_duplicates(_load(items, sources))
-        prep = prepare_reports(r)
-        rows, order = prepare_rows(prep.inputs, cfg)
-        out = first_track(rows, cfg)
-        ref = Refinement(rows, out, cfg) if cfg.refine and rows.t.size else None
-        path = folder / f"state{j}.pkl"
-        with path.open("wb") as fh:
-            pickle.dump(_Group(r, prep, rows, order, ref), fh, protocol=5)
-        paths.append(path)
-        if ref is not None:
-            live.append(path)
-        del r, prep, rows, out, ref
-    if cfg.refine and live:
-        drive(_Spilled(live), cfg)
-    for p in paths:
-        with p.open("rb") as fh:
-            grp = pickle.load(fh)
-        p.unlink()
-        emit(grp.reports, _finish(grp, cfg))
+        grp = start_group(_load(items, sources), cfg)
+        if grp.ref is not None:
+            path = folder / f"ref{j}.pkl"
+            _dump(grp.ref, path)
+            refs.append(path)
+            scores.append(_ident_scores(grp.ref))
+            grp.ref = None
+        ctx.append(folder / f"group{j}.pkl")
+        _dump((grp, refs[-1] if refs and refs[-1].name == f"ref{j}.pkl" else None), ctx[-1])
+        del grp
+    if refs:
+        drive(_Spilled(refs, scores), cfg)
+    for path in ctx:
+        grp, ref_path = _undump(path)
+        path.unlink()
+        if ref_path is not None:
+            grp.ref = _undump(ref_path)
+            ref_path.unlink()
+        emit(grp.reports, finish_group(grp))
+        del grp
 
 
 def track_files(

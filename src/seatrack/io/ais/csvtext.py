@@ -7,6 +7,9 @@ of 23 columns against 2-4 s for pyarrow's column-wise formatting on this machine
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import Any
+
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
@@ -117,27 +120,30 @@ def _label(buf, pos, table, offsets, k):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def _rows(
-    mmsi, ms, values, decimals, outlier, kind, segment, raw, code, source, line, labels
+    order, mmsi, ms, values, decimals, outlier, kind, segment, raw, code, source, line, labels
 ):  # pragma: no cover - compiled
-    """All rows into one byte buffer (columns in the order of ``output.HEADER``)."""
-    n = mmsi.shape[0]
+    """Rows ``order`` into one byte buffer (columns in the order of ``output.HEADER``);
+    ``values`` and ``raw`` are tuples of columns."""
+    n = order.shape[0]
     kind_t, kind_o, code_t, code_o, src_t, src_o = labels
-    width = 64 + 24 * values.shape[1] + 48 + kind_t.size + code_t.size + src_t.size
+    n_val = len(values)
+    width = 64 + 24 * n_val + 48 + kind_t.size + code_t.size + src_t.size
     buf = np.empty(n * width, dtype=np.uint8)
     p10 = np.empty(decimals.size)
     for c in range(decimals.size):
         p10[c] = 10.0 ** decimals[c]
     pos = 0
-    for i in range(n):
+    for k in range(n):
+        i = order[k]
         if mmsi[i] >= 0:
             pos = _uint(buf, pos, mmsi[i])
         buf[pos] = 44
         pos += 1
         if ms[i] >= 0:
             pos = _time(buf, pos, ms[i])
-        for c in range(values.shape[1]):
+        for c in range(n_val):
             buf[pos] = 44
-            pos = _fixed(buf, pos + 1, values[i, c], decimals[c], p10[c])
+            pos = _fixed(buf, pos + 1, values[c][i], decimals[c], p10[c])
         buf[pos] = 44
         buf[pos + 1] = 49 if outlier[i] else 48
         buf[pos + 2] = 44
@@ -148,7 +154,7 @@ def _rows(
             pos = _int(buf, pos, segment[i])
         for c in range(2):
             buf[pos] = 44
-            pos = _fixed(buf, pos + 1, raw[i, c], 6, 1e6)
+            pos = _fixed(buf, pos + 1, raw[c][i], 6, 1e6)
         buf[pos] = 44
         pos = _label(buf, pos + 1, code_t, code_o, code[i])
         buf[pos] = 44
@@ -174,39 +180,40 @@ def label_table(labels: list[str]) -> tuple[NDArray[np.uint8], NDArray[np.int64]
 
 
 def csv_rows(
-    mmsi: NDArray[np.int64],
-    ms: NDArray[np.int64],
-    values: NDArray[np.float64],
-    decimals: NDArray[np.int64],
-    outlier: NDArray[np.bool_],
-    kind: NDArray[np.int64],
-    segment: NDArray[np.int64],
-    raw: NDArray[np.float64],
-    code: NDArray[np.int64],
-    source: NDArray[np.int64],
-    line: NDArray[np.int64],
+    order: NDArray[Any],
+    mmsi: NDArray[Any],
+    ms: NDArray[Any],
+    values: Sequence[NDArray[np.float64]],
+    decimals: NDArray[Any],
+    outlier: NDArray[Any],
+    kind: NDArray[Any],
+    segment: NDArray[Any],
+    raw: Sequence[NDArray[np.float64]],
+    code: NDArray[Any],
+    source: NDArray[Any],
+    line: NDArray[Any],
     kinds: list[str],
     reasons: list[str],
     sources: list[str],
-) -> bytes:
-    """CSV text of TRACKS rows: ``mmsi`` (-1 empty), ``ms`` epoch milliseconds (-1 empty),
-    ``values`` (N, C) with ``decimals`` (NaN empty), ``outlier``, ``kind`` into ``kinds``,
-    ``segment`` (-1 empty), ``raw`` (N, 2) latitude and longitude (6 decimals), ``code``
-    into ``reasons``, ``source`` into ``sources``, ``line``."""
+) -> NDArray[np.uint8]:
+    """CSV text (bytes) of the TRACKS rows ``order``: ``mmsi`` (-1 empty), ``ms`` epoch
+    milliseconds (-1 empty), ``values`` columns with ``decimals`` (NaN empty), ``outlier``,
+    ``kind`` into ``kinds``, ``segment`` (-1 empty), ``raw`` latitude and longitude columns
+    (6 decimals), ``code`` into ``reasons``, ``source`` into ``sources``, ``line``."""
     labels = (*label_table(kinds), *label_table(reasons), *label_table(sources))
     c = np.ascontiguousarray
-    buf = _rows(
+    return _rows(
+        c(order, np.int64),
         c(mmsi, np.int64),
         c(ms, np.int64),
-        c(values, np.float64),
+        tuple(c(v, np.float64) for v in values),
         c(decimals, np.int64),
         c(outlier, np.bool_),
         c(kind, np.int64),
         c(segment, np.int64),
-        c(raw, np.float64),
+        tuple(c(v, np.float64) for v in raw),
         c(code, np.int64),
         c(source, np.int64),
         c(line, np.int64),
         labels,
     )
-    return buf.tobytes()

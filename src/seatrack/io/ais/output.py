@@ -140,10 +140,43 @@ def _prepare(r: AisReports, columns: dict[str, NDArray]) -> tuple[AisReports, di
     return r.take(order), {k: np.asarray(v)[order] for k, v in columns.items()}
 
 
+def _ms(t: NDArray[np.float64]) -> NDArray[np.int64]:
+    """Epoch milliseconds of times in 1970-2100, -1 elsewhere."""
+    ok = np.isfinite(t) & (t >= TIME_MIN) & (t < TIME_MAX)
+    return np.where(ok, np.rint(np.where(ok, t, 0.0) * 1000.0), -1).astype(np.int64)
+
+
+def _csv_body(r: AisReports, columns: dict[str, NDArray]) -> NDArray[np.uint8]:
+    """CSV rows of ``r`` in output order (compiled; no copies of the columns)."""
+    from seatrack.io.ais.csvtext import csv_rows
+
+    n = len(r)
+    nan = np.full(n, np.nan)
+    cols = {k: np.asarray(v) for k, v in columns.items()}
+    return csv_rows(
+        output_order(r),
+        r.mmsi,
+        _ms(r.t),
+        [cols.get(c, nan) for c in TRACK_COLUMNS],
+        np.array(list(TRACK_COLUMNS.values()), dtype=np.int64),
+        cols.get("outlier", np.zeros(n, dtype=bool)),
+        cols.get("outlier_kind", np.zeros(n, dtype=np.int64)),
+        cols.get("segment", np.full(n, -1, dtype=np.int64)),
+        [r.lat, r.lon],
+        r.code,
+        r.source,
+        r.line,
+        _OUTLIER_LABELS,
+        list(REASON_LABELS),
+        list(r.sources),
+    )
+
+
 def tracks_csv_bytes(r: AisReports, columns: dict[str, NDArray], header: bool = True) -> bytes:
     """TRACKS CSV text of the rows of ``r`` (in output order) and their track ``columns``
     (:func:`track_columns`: one value per row of ``r``)."""
-    return table_csv_bytes(tracks_table(r, columns), header)
+    body = _csv_body(r, columns).tobytes()
+    return (",".join(HEADER) + "\n").encode() + body if header else body
 
 
 def _numpy(col: Any, dtype: Any, fill: Any) -> NDArray:
@@ -177,13 +210,12 @@ def table_csv_bytes(table: Any, header: bool = True) -> bytes:
         ms = _numpy(
             table.column("time_utc").cast(pa.timestamp("ms")).cast(pa.int64()), np.int64, -1
         )
-    values = np.column_stack(
-        [col(c, np.float64, np.nan) for c in TRACK_COLUMNS] or [np.zeros(table.num_rows)]
-    ).reshape(table.num_rows, len(TRACK_COLUMNS))
+    values = [col(c, np.float64, np.nan) for c in TRACK_COLUMNS]
     kind, kinds = _codes(table.column("outlier_reason"))
     code, reasons = _codes(table.column("reject_reason"))
     source, sources = _codes(table.column("source"))
     body = csv_rows(
+        np.arange(table.num_rows),
         col("mmsi", np.int64, -1),
         ms,
         values,
@@ -191,7 +223,7 @@ def table_csv_bytes(table: Any, header: bool = True) -> bytes:
         col("outlier", np.bool_, False),
         kind,
         col("segment", np.int64, -1),
-        np.column_stack([col("raw_lat", np.float64, np.nan), col("raw_lon", np.float64, np.nan)]),
+        [col("raw_lat", np.float64, np.nan), col("raw_lon", np.float64, np.nan)],
         code,
         source,
         col("line", np.int64, 0),
@@ -199,7 +231,7 @@ def table_csv_bytes(table: Any, header: bool = True) -> bytes:
         reasons,
         sources,
     )
-    return ((",".join(HEADER) + "\n").encode() if header else b"") + body
+    return (",".join(HEADER) + "\n").encode() + body.tobytes() if header else body.tobytes()
 
 
 def write_table(writer: TracksWriter, table: Any) -> None:
@@ -262,7 +294,11 @@ class TracksWriter(contextlib.AbstractContextManager["TracksWriter"]):
 
     def write(self, r: AisReports, columns: dict[str, NDArray]) -> None:
         """Append the rows of ``r`` (a group of whole vessels) in output order."""
-        self.write_table(tracks_table(r, columns))
+        if self.format == "csv":
+            self._fh.write(_csv_body(r, columns).data)
+            self.rows += len(r)
+        else:
+            self.write_table(tracks_table(r, columns))
 
     def write_table(self, table: Any) -> None:
         """Append a TRACKS table (:func:`tracks_table`, rows in output order)."""

@@ -287,7 +287,7 @@ def _batch(
         return from_text_columns(source, lines, cols)
     num = {}
     for f in _NUMERIC:
-        c = mapping[f]
+        c = mapping.get(f, "")
         if c in names:
             col = batch.column(c)
             missing = col.is_null().to_numpy(zero_copy_only=False)

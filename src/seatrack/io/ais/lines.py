@@ -88,8 +88,9 @@ def parse_lines(lines: list[bytes], source: str) -> AisReports:
             rejects.append((i, "empty row"))
         else:
             csv_lines.append(i)
-            for f, k in cols.items():
-                csv_cells[f].append(fields[k].strip())
+            for f, cells in csv_cells.items():
+                k = cols.get(f, -1)
+                cells.append(fields[k].strip() if k >= 0 else "")
     parts = [_csv_part(source, csv_lines, csv_cells), _nmea_part(source, nmea, skipped)]
     parts.append(_reject_part(source, rejects))
     r = concat_reports(parts)
@@ -103,7 +104,7 @@ def parse_lines(lines: list[bytes], source: str) -> AisReports:
 
 def _csv_part(source: str, lines: list[int], cells: dict[str, list[str]]) -> AisReports:
     n = len(lines)
-    cols = {f: np.asarray(v, dtype=str) if n else np.zeros(0, dtype=str) for f, v in cells.items()}
+    cols = {f: np.asarray(v, dtype=str) for f, v in cells.items() if n}
     return from_text_columns(source, np.asarray(lines, dtype=np.int64), cols)
 
 

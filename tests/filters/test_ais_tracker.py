@@ -635,3 +635,22 @@ def test_real_states_stay_within_physical_limits(name: str) -> None:
     with np.errstate(divide="ignore"):
         lim = np.minimum(math.radians(CFG.max_turn_rate_dps), CFG.max_accel_mps2 / tr.speed[ok])
     assert np.all(np.abs(tr.turn_rate[ok]) <= lim * (1 + 1e-9))
+
+
+def test_vessel_groups_share_the_offset_prior_and_equal_one_table() -> None:
+    """Tracking vessels in groups (bounded memory, Dask partitions) gives the result of one
+    table: the timestamp-offset prior is estimated from the counts of all groups."""
+    from seatrack.filters.ais.tracker import VesselInputs, track_vessel_groups
+
+    r, _ = tracked("dk_northsea_20221101_1h_selected.csv")
+    ok = r.valid
+    fr = local_frames(r.mmsi, r.lat, r.lon, ok)
+    m, t, xy = r.mmsi[ok], r.t[ok], fr.enu[ok, :2]
+    whole = track_vessels(m, t, xy, CFG)
+    vessels = np.unique(m)
+    parts = [np.isin(m, vessels[k::3]) for k in range(3)]
+    groups = track_vessel_groups([VesselInputs(m[p], t[p], xy[p]) for p in parts], CFG)
+    assert np.count_nonzero(whole.time_offset) > 100  # the prior matters on this file
+    for p, g in zip(parts, groups, strict=True):
+        for f in ("state", "std", "outlier_kind", "segment", "nis", "time_offset"):
+            assert np.array_equal(getattr(whole, f)[p], getattr(g, f), equal_nan=True), f

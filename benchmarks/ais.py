@@ -197,7 +197,7 @@ def print_real(rows: list[tuple[str, dict[str, float]]], anchor: float) -> None:
     )
 
 
-def print_scale(cases: list[dict[str, Any]]) -> None:
+def print_scale(cases: list[dict[str, Any]], flush: bool = False) -> None:
     hdr = (
         f"{'case':34s} {'reports':>10s} {'limit':>6s} {'wall s':>7s} {'cpu s':>7s} "
         f"{'peak MB':>8s} {'rep/s':>9s} {'pyarrow read s':>14s} {'target':>24s} {'met':>4s}"
@@ -209,7 +209,8 @@ def print_scale(cases: list[dict[str, Any]]) -> None:
         print(
             f"{c['name']:34s} {c['n']:10,d} {c['limit']:>6s} {c['wall']:7.1f} {c['cpu']:7.1f} "
             f"{c['rss']:8.0f} {c['rate']:9,.0f} {c['arrow']:14.2f} {target:>24s} "
-            f"{'yes' if ok else 'NO':>4s}"
+            f"{'yes' if ok else 'NO':>4s}",
+            flush=flush,
         )
 
 
@@ -259,6 +260,7 @@ def main(argv: list[str] | None = None) -> int:
             c = scale_case("three hourly files (common)", files, hourly, "1G", args.repeat, tmpd)
             c["target"] = (">=150k rep/s, <=1024 MB", c["rate"] >= 150e3 and c["rss"] <= 1024)
             cases.append(c)
+            print_scale(cases, flush=True)
             for f in files:
                 f.unlink()
             t = time.perf_counter()

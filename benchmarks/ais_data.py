@@ -126,7 +126,16 @@ def _write(path: Path, header: list[str], cols: list[pa.Array | pa.Scalar]) -> N
 
 
 def write_csv(path: Path, d: dict[str, np.ndarray], layout: str = "common") -> None:
-    """Write the reports ``d`` (from :func:`vessels`) as CSV in ``layout`` (common / dma)."""
+    """Write the reports ``d`` (from :func:`vessels`) as CSV in ``layout`` (common / dma),
+    two million rows at a time."""
+    header = COMMON_COLUMNS if layout == "common" else DMA_COLUMNS
+    path.write_text(",".join(header) + "\n")
+    n = d["t"].size
+    for k in range(0, n, 2_000_000):
+        _write_rows(path, {key: v[k : k + 2_000_000] for key, v in d.items()}, layout)
+
+
+def _write_rows(path: Path, d: dict[str, np.ndarray], layout: str) -> None:
     ts = pa.array(d["t"].astype(np.int64), pa.timestamp("s"))
     if layout == "common":
         header = COMMON_COLUMNS
@@ -174,7 +183,6 @@ def write_csv(path: Path, d: dict[str, np.ndarray], layout: str = "common") -> N
             "Heading": pc.cast(pa.array(d["cog"].astype(np.int64)), pa.string()),
         }
         cols = [by_name[c] if c in by_name else pa.scalar(const[c]) for c in header]
-    path.write_text(",".join(header) + "\n")
     _write(path, header, cols)
 
 

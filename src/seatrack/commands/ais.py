@@ -126,11 +126,11 @@ def run(
         maps.extend(map_tracks(r, tr))
 
     if use_dask:
+        if want_map:
+            raise InputError("--geojson and --html are not available with --dask")
         from seatrack.io.ais.cluster import track_files_dask
 
         summary = track_files_dask(inputs, out, cfg, scheduler=scheduler)
-        if want_map:
-            raise InputError("--geojson/--html are not available with --dask (map the output)")
     else:
         from seatrack.io.ais.pipeline import track_files
 
@@ -138,20 +138,25 @@ def run(
             inputs, out, cfg, memory_limit=memory_limit, on_group=collect if want_map else None
         )
     lines = summary.lines()
+    # the map files through io.atomic whatever the report module does with a path
+    from seatrack.io.atomic import atomic_path
+
     if geojson is not None:
         from seatrack.report.html import write_geojson
 
-        write_geojson(geojson, maps)
+        with atomic_path(geojson) as tmp:
+            write_geojson(tmp, maps)
     if html is not None:
         from seatrack.report.html import write_html
 
-        write_html(
-            html,
-            maps,
-            title=f"AIS tracks: {', '.join(p.name for p in inputs)}",
-            summary="; ".join(lines),
-            tile_url=tile_url,
-        )
+        with atomic_path(html) as tmp:
+            write_html(
+                tmp,
+                maps,
+                title=f"AIS tracks: {', '.join(p.name for p in inputs)}",
+                summary="; ".join(lines),
+                tile_url=tile_url,
+            )
     lines.append(f"wrote {out} ({summary.rows} rows)")
     lines += [f"wrote {p}" for p in (geojson, html) if p is not None]
     return lines
@@ -220,6 +225,8 @@ def register(app: typer.Typer) -> None:
         limit = parse_size(memory_limit)
         if scheduler is not None and not use_dask:
             raise InputError("--scheduler needs --dask")
+        if use_dask and (geojson is not None or html is not None):
+            raise InputError("--geojson and --html are not available with --dask")
         if tile_url is not None and "{z}" not in tile_url:
             raise InputError(f"--tile-url: needs {{z}}, {{x}} and {{y}}, got {tile_url!r}")
         _check_outputs(out, [geojson, html], use_dask)

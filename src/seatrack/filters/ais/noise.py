@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from seatrack.filters.ais.config import CHI2_1_MEDIAN, AisTrackerConfig, trim_scale
@@ -10,7 +11,7 @@ from seatrack.filters.ais.plausibility import neighbours
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["position_noise", "group_median", "group_trimmed_mean"]
+__all__ = ["position_noise", "group_median", "group_trimmed_mean", "sorted_by_group"]
 
 
 def position_noise(
@@ -109,9 +110,8 @@ def group_trimmed_mean(
     """Per-group variance estimate from chi-square(1)-distributed ``x = r^2 / var``: the mean
     of the smallest fraction ``keep`` of each group's values, divided by its expectation
     ``E[X | X <= chi2_1(keep)] = F_3(chi2_1(keep)) / keep`` (``x f_1(x) = f_3(x)``)."""
-    order = np.lexsort((x, group))
-    xs, gs = x[order], group[order]
-    count = np.bincount(gs, minlength=n_groups)
+    xs, count = sorted_by_group(group, x, n_groups)
+    gs = np.repeat(np.arange(n_groups), count)
     first = np.r_[0, np.cumsum(count)[:-1]]
     n_keep = np.maximum(np.ceil(keep * count).astype(np.int64), 1)
     rank = np.arange(xs.size) - first[gs]
@@ -126,9 +126,7 @@ def group_trimmed_mean(
 
 def group_median(group: NDArray[np.int64], n_groups: int, x: FloatArray) -> FloatArray:
     """Median of ``x`` per group ``0..n_groups-1`` (NaN for empty groups), vectorised."""
-    order = np.lexsort((x, group))
-    xs, gs = x[order], group[order]
-    count = np.bincount(gs, minlength=n_groups)
+    xs, count = sorted_by_group(group, x, n_groups)
     first = np.r_[0, np.cumsum(count)[:-1]]
     out = np.full(n_groups, np.nan)
     has = count > 0
@@ -136,3 +134,34 @@ def group_median(group: NDArray[np.int64], n_groups: int, x: FloatArray) -> Floa
     hi = first[has] + count[has] // 2
     out[has] = 0.5 * (xs[lo] + xs[hi])
     return out
+
+
+@njit(cache=True)
+def _sorted_by_group(group, x, n_groups):  # pragma: no cover - compiled
+    count = np.zeros(n_groups, dtype=np.int64)
+    for g in group:
+        count[g] += 1
+    start = np.zeros(n_groups + 1, dtype=np.int64)
+    for g in range(n_groups):
+        start[g + 1] = start[g] + count[g]
+    out = np.empty(x.size)
+    pos = start[:-1].copy()
+    for i in range(x.size):
+        g = group[i]
+        out[pos[g]] = x[i]
+        pos[g] += 1
+    for g in range(n_groups):
+        out[start[g] : start[g + 1]].sort()
+    return out, count
+
+
+def sorted_by_group(
+    group: NDArray[np.int64], x: FloatArray, n_groups: int
+) -> tuple[FloatArray, NDArray[np.int64]]:
+    """``x`` sorted by (group, value) -- ``x[np.lexsort((x, group))]`` by a counting sort of
+    the groups and a sort within each -- and the count of each group ``0..n_groups-1``."""
+    return _sorted_by_group(
+        np.ascontiguousarray(group, dtype=np.int64),
+        np.ascontiguousarray(x, dtype=np.float64),
+        n_groups,
+    )

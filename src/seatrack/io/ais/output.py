@@ -151,21 +151,26 @@ def _csv_body(r: AisReports, columns: dict[str, NDArray]) -> NDArray[np.uint8]:
     from seatrack.io.ais.csvtext import csv_rows
 
     n = len(r)
+    order = output_order(r)
     nan = np.full(n, np.nan)
+
+    def take(a: NDArray) -> NDArray:  # gathered column by column: the writer reads in order
+        return np.asarray(a)[order]
+
     cols = {k: np.asarray(v) for k, v in columns.items()}
     return csv_rows(
-        output_order(r),
-        r.mmsi,
-        _ms(r.t),
-        [cols.get(c, nan) for c in TRACK_COLUMNS],
+        np.arange(n),
+        take(r.mmsi),
+        take(_ms(r.t)),
+        [take(cols[c]) if c in cols else nan for c in TRACK_COLUMNS],
         np.array(list(TRACK_COLUMNS.values()), dtype=np.int64),
-        cols.get("outlier", np.zeros(n, dtype=bool)),
-        cols.get("outlier_kind", np.zeros(n, dtype=np.int64)),
-        cols.get("segment", np.full(n, -1, dtype=np.int64)),
-        [r.lat, r.lon],
-        r.code,
-        r.source,
-        r.line,
+        take(cols.get("outlier", np.zeros(n, dtype=bool))),
+        take(cols.get("outlier_kind", np.zeros(n, dtype=np.int64))),
+        take(cols.get("segment", np.full(n, -1, dtype=np.int64))),
+        [take(r.lat), take(r.lon)],
+        take(r.code),
+        take(r.source),
+        take(r.line),
         _OUTLIER_LABELS,
         list(REASON_LABELS),
         list(r.sources),

@@ -201,12 +201,18 @@ def enu_to_geodetic(
     Inverse of :func:`geodetic_to_enu` (one origin, or one per point); returns degrees,
     degrees, metres.
     """
-    _, inv = _transformers()
     e = np.asarray(enu, dtype=float)
     if e.shape[-1] == 2:
         e = np.concatenate([e, np.zeros(e.shape[:-1] + (1,))], axis=-1)
-    X0, Y0, Z0, (sl, cl, so, co) = _origin(lat0_deg, lon0_deg, h0_m)
-    E, N, U = e[..., 0], e[..., 1], e[..., 2]
+    return _enu_to_geodetic_at(e[..., 0], e[..., 1], e[..., 2], _origin(lat0_deg, lon0_deg, h0_m))
+
+
+def _enu_to_geodetic_at(
+    E: FloatArray, N: FloatArray, U: FloatArray, origin: tuple[Any, ...]
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """:func:`enu_to_geodetic` about an origin computed by :func:`_origin`."""
+    _, inv = _transformers()
+    X0, Y0, Z0, (sl, cl, so, co) = origin
     # the transposed rotation
     X = -so * E - sl * co * N + cl * co * U + X0
     Y = co * E - sl * so * N + cl * so * U + Y0
@@ -295,10 +301,11 @@ def local_to_geodetic(
     E, N = e[ok], nn[ok]
     la0, lo0 = la0_all[ok], lo0_all[ok]
     U = -(E**2 + N**2) / (2.0 * 6_371_000.0)
+    origin = _origin(la0, lo0, 0.0)  # once for all iterations
     for _ in range(iterations):
-        _, _, h = enu_to_geodetic(np.stack([E, N, U], -1), la0, lo0)
+        _, _, h = _enu_to_geodetic_at(E, N, U, origin)
         U = U - h
-    lat[ok], lon[ok], _ = enu_to_geodetic(np.stack([E, N, U], -1), la0, lo0)
+    lat[ok], lon[ok], _ = _enu_to_geodetic_at(E, N, U, origin)
     return lat, lon
 
 

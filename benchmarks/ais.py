@@ -133,15 +133,24 @@ def run_file(path: Path, cfg: AisTrackerConfig, out_dir: Path) -> dict[str, floa
 
 
 def child(cmd: list[str]) -> tuple[float, float, float]:
-    """Run ``cmd``; (wall s, CPU s user + system, peak resident MB) of that child alone."""
-    t = time.perf_counter()
-    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-    _, status, ru = os.wait4(proc.pid, 0)
-    wall = time.perf_counter() - t
-    err = proc.stderr.read().decode() if proc.stderr else ""
-    proc.returncode = os.waitstatus_to_exitcode(status)
-    if proc.returncode:
-        raise RuntimeError(f"{' '.join(cmd)} failed: {err}")
+    """Run ``cmd``; (wall s, CPU s user + system, peak resident MB) of that child alone.
+
+    Through ``/usr/bin/time`` where it exists: the peak of a child forked from this process
+    (``os.wait4``) would include this process's own resident memory at the fork, which Linux
+    keeps in the child's high-water mark across ``exec``."""
+    timer = Path("/usr/bin/time")
+    with tempfile.NamedTemporaryFile("r", suffix=".time") as rec:
+        full = [str(timer), "-f", "%e %U %S %M", "-o", rec.name, *cmd] if timer.exists() else cmd
+        t = time.perf_counter()
+        proc = subprocess.Popen(full, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+        _, status, ru = os.wait4(proc.pid, 0)
+        wall = time.perf_counter() - t
+        err = proc.stderr.read().decode() if proc.stderr else ""
+        if os.waitstatus_to_exitcode(status):
+            raise RuntimeError(f"{' '.join(cmd)} failed: {err}")
+        if timer.exists():
+            e, u, s, m = rec.read().split()[-4:]
+            return float(e), float(u) + float(s), float(m) / 1024.0
     return wall, ru.ru_utime + ru.ru_stime, ru.ru_maxrss / 1024.0
 
 

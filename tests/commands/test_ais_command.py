@@ -251,10 +251,25 @@ def test_dask_output_equals_one_process(tmp_path: Path) -> None:
 
     files = split_file(data_file("dk_northsea_20221101_1h_selected.csv"), tmp_path, 3)
     one = track_files(files, tmp_path / "one.csv")
+    track_files(files, tmp_path / "one.parquet")
     with dask_client(processes=False) as client:
         many = track_files_dask(files, tmp_path / "dask.csv", partitions=4, client=client)
+        track_files_dask(files, tmp_path / "dask.parquet", partitions=4, client=client)
     assert (tmp_path / "dask.csv").read_bytes() == (tmp_path / "one.csv").read_bytes()
     assert one.lines() == many.lines()
+    # partitioned Parquet: one file per partition, the same rows as one process
+    import pyarrow.compute as pc
+    import pyarrow.parquet as pq
+
+    parts = sorted((tmp_path / "dask.parquet").iterdir())
+    assert len(parts) == 5  # 4 MMSI partitions + the rows without an MMSI
+
+    def by_line(t):  # noqa: ANN001, ANN202
+        return t.take(pc.sort_indices(t, [("source", "ascending"), ("line", "ascending")]))
+
+    a = by_line(pq.read_table(tmp_path / "one.parquet"))
+    b = by_line(pq.read_table(tmp_path / "dask.parquet"))
+    assert a.equals(b)
     # vessels cross the file boundaries
     rows = _rows(tmp_path / "one.csv")
     per_vessel: dict[str, set[str]] = {}

@@ -444,7 +444,9 @@ def extended_predict(
     return _f(fx), _cov_predict_kernel(P, F, Q)
 
 
-def update(x: ArrayLike, P: ArrayLike, z: ArrayLike, H: ArrayLike, R: ArrayLike) -> UpdateResult:
+def update(
+    x: ArrayLike, P: ArrayLike, z: ArrayLike, H: ArrayLike, R: ArrayLike, check: bool = True
+) -> UpdateResult:
     """Linear Kalman update with measurement ``z = H x + v``, ``v ~ N(0, R)``.
 
     Parameters
@@ -454,6 +456,11 @@ def update(x: ArrayLike, P: ArrayLike, z: ArrayLike, H: ArrayLike, R: ArrayLike)
     z : array (..., m)
     H : array (..., m, n)
     R : array (..., m, m)
+    check : bool
+        Raise when an innovation covariance is not positive definite (default). With
+        ``check=False`` such elements get NaN ``x``, ``nis`` and ``log_likelihood`` (and an
+        unspecified ``P``) instead, so a batch can isolate them (see
+        :func:`seatrack.filters.base.finish_update`).
 
     Returns
     -------
@@ -464,14 +471,15 @@ def update(x: ArrayLike, P: ArrayLike, z: ArrayLike, H: ArrayLike, R: ArrayLike)
     Raises
     ------
     numpy.linalg.LinAlgError
-        If the innovation covariance is not positive definite.
+        If the innovation covariance is not positive definite (and ``check``).
     """
     if _is_single(8, x, P, z, H, R):
         xo, Po, y, S, K = _outputs(x.shape[0], z.shape[0])  # type: ignore[union-attr]
         nis, ll = _linear_update_single(x, P, z, H, R, xo, Po, y, S, K)
     else:
         xo, Po, y, S, nis, ll, K = _linear_update_kernel(x, P, z, H, R)
-    _check(ll, S)
+    if check:
+        _check(ll, S)
     return UpdateResult(xo, Po, y, S, nis, ll, K)
 
 
@@ -483,6 +491,7 @@ def extended_update(
     H: ArrayLike,
     R: ArrayLike,
     angular: ArrayLike | None = None,
+    check: bool = True,
 ) -> UpdateResult:
     """Extended Kalman update for a nonlinear measurement ``z = h(x) + v``.
 
@@ -500,6 +509,8 @@ def extended_update(
     angular : array of bool (m,), optional
         Components that are angles (rad); their innovations are wrapped to
         ``(-pi, pi]``. Measurement models expose this as ``model.angular``.
+    check : bool
+        As for :func:`update`.
 
     Returns
     -------
@@ -512,7 +523,8 @@ def extended_update(
         nis, ll = _extended_update_single(x, P, zz, hx, H, R, ang, xo, Po, y, S, K)
     else:
         xo, Po, y, S, nis, ll, K = _update_kernel(x, P, zz, hx, H, R, ang)
-    _check(ll, S)
+    if check:
+        _check(ll, S)
     return UpdateResult(xo, Po, y, S, nis, ll, K)
 
 

@@ -44,23 +44,17 @@ def parse_size(text: str, option: str = "--memory-limit") -> int:
     return int(value)
 
 
-def _positive(option: str, value: float, allow_zero: bool = False) -> None:
-    ok = math.isfinite(value) and (value >= 0 if allow_zero else value > 0)
-    if not ok:
-        need = ">= 0" if allow_zero else "> 0"
-        raise InputError(f"{option}: must be a finite number {need}, got {value}")
-
-
 def tracker_config(
     sigma_pos: float, max_gap: float, max_speed: float, max_accel: float, smooth: bool
 ) -> Any:
     """The tracker configuration of the command's options (each checked, by name)."""
+    from seatrack.commands.options import option_positive
     from seatrack.filters.ais import AisTrackerConfig
 
-    _positive("--sigma-pos", sigma_pos)
-    _positive("--max-gap", max_gap)
-    _positive("--max-speed", max_speed)
-    _positive("--max-accel", max_accel)
+    option_positive("--sigma-pos", sigma_pos, 1e4)
+    option_positive("--max-gap", max_gap, 1e9)
+    option_positive("--max-speed", max_speed, 1e4)
+    option_positive("--max-accel", max_accel, 1e3)
     if sigma_pos < AisTrackerConfig.sigma_pos_min_m:
         raise InputError(
             f"--sigma-pos: must be at least {AisTrackerConfig.sigma_pos_min_m} m, got {sigma_pos}"
@@ -95,7 +89,7 @@ def map_tracks(reports: Any, tracks: Any) -> list[Any]:
 
 def _check_outputs(out: Path, extra: Sequence[Path | None], use_dask: bool) -> None:
     """Check every output path before any work (a bad one fails fast)."""
-    from seatrack.io.atomic import check_output_path
+    from seatrack.commands.options import prepare_outputs
 
     paths = [p for p in (out, *extra) if p is not None]
     names = [str(Path(p).resolve()) for p in paths]
@@ -103,8 +97,7 @@ def _check_outputs(out: Path, extra: Sequence[Path | None], use_dask: bool) -> N
         raise InputError("--out, --geojson and --html must be different files")
     if use_dask and out.suffix.lower() not in (".parquet", ".pq", ".csv"):
         raise InputError(f"--out: with --dask, give a .csv file or a .parquet folder, got {out}")
-    for p in paths:
-        check_output_path(p)
+    prepare_outputs(paths)
 
 
 def run(
@@ -171,6 +164,20 @@ def track_files(paths: Sequence[str | Path], config: Any = None) -> tuple[Any, A
 
     reports = read_ais(list(paths))
     return reports, track_reports(reports, config or AisTrackerConfig())
+
+
+def not_utf8(paths: Sequence[Path]) -> Exception:
+    """The error for an input that is not UTF-8: the first such file, its line and byte."""
+    from seatrack.io.table import InputError
+
+    for p in paths:
+        data = p.read_bytes()
+        try:
+            data.decode("utf-8-sig")
+        except UnicodeDecodeError as exc:
+            line = data[: exc.start].count(b"\n") + 1
+            return InputError(f"{p}, line {line}: not UTF-8 text (byte 0x{data[exc.start]:02x})")
+    return InputError(f"{', '.join(map(str, paths))}: not UTF-8 text")
 
 
 def register(app: typer.Typer) -> None:

@@ -70,18 +70,30 @@ def register(app: typer.Typer) -> None:
         out: Path = typer.Option(..., "--out", "-o", help="TRACK.csv to write (one row per plot)"),
     ) -> None:
         """Run a tracking filter over recorded radar/sonar plots."""
+        from seatrack.commands.options import prepare_outputs
         from seatrack.filters.registry import get_method
+        from seatrack.io.atomic import atomic_path
         from seatrack.io.plots import read_plots
 
         runner = get_method(method)
         cfg = load_config(config)
+        for k, v in cfg.items():  # the config layer checks ranges; here: no NaN / inf
+            if isinstance(v, float) and not np.isfinite(v):
+                raise InputError(f"{config}: {k} = {v} is not a finite number")
+        prepare_outputs([out])
         tracks = read_plots(plots_csv)
         rows = []
         for pt in tracks:
-            cols = runner(pt, cfg)
+            try:
+                cols = runner(pt, cfg)
+            except ValueError as exc:  # a configuration problem names the file it is in
+                if config is not None and "key" in str(exc) and not isinstance(exc, InputError):
+                    raise InputError(f"{config}: {exc}") from None
+                raise
             bad = [c for c, v in cols.items() if len(v) != len(pt)]
             if bad:  # pragma: no cover - a method bug, not user input
                 raise RuntimeError(f"method {method} returned wrong-length columns {bad}")
             rows.append((pt.track, pt.t, cols))
-        n = write_track_csv(out, rows)
+        with atomic_path(out) as tmp:
+            n = write_track_csv(tmp, rows)
         typer.echo(f"{method}: {len(tracks)} track(s), {n} rows written to {out}")

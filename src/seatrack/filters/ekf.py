@@ -26,17 +26,30 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from seatrack import kalman
+from seatrack.config import param
+from seatrack.filters.base import (
+    Plots,
+    PlotStatus,
+    SensorNoise,
+    TrackState,
+    common_columns,
+    finish_update,
+    measurement_model,
+    measurement_noise,
+)
 from seatrack.geometry import spherical_to_cart
 from seatrack.io.plots import PlotTrack
 from seatrack.models.measurement import RangeBearing, RangeBearingElevation, RangeRate, Stacked
-from seatrack.models.motion import ConstantVelocity
+from seatrack.models.motion import ConstantVelocity, cv_noise, cv_transition
 
 FloatArray = NDArray[np.float64]
 
 __all__ = [
+    "EKF",
+    "EKFConfig",
     "PlotMeasurements",
     "plot_measurements",
     "initial_state",
@@ -185,3 +198,111 @@ def track_plots(plots: PlotTrack, config: Mapping[str, Any]) -> dict[str, FloatA
     cols = output_columns(run.x, run.P, run.d)
     cols["nis"] = run.nis
     return cols
+
+
+# ---------------------------------------------------------------------------
+# The filter contract (seatrack.filters.base)
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class EKFConfig:
+    """Parameters of the constant-velocity EKF (``seatrack track --method ekf``)."""
+
+    q: float = param(1.0, unit="m^2/s^3", doc="white-noise acceleration PSD", min=0)
+    initial_speed_sigma: float = param(
+        50.0,
+        key="initial_speed_sigma_mps",
+        unit="m/s",
+        doc="velocity std of a new track (per axis)",
+        min=0,
+        exclusive_min=True,
+    )
+    use_range_rate: bool = param(True, doc="use the plots' range rate when they have one")
+
+
+class EKF:
+    """Constant-velocity extended Kalman filter on polar plots (the reference filter).
+
+    State ``[x, y, (z), vx, vy, (vz)]`` (m, m/s); continuous white-noise acceleration with
+    PSD ``q``; measurements range, azimuth, [elevation], [range rate] used in polar form
+    with wrapped angle innovations; Joseph-form update. Implements
+    :class:`seatrack.filters.base.RecursiveFilter` on batches of tracks.
+
+    Parameters
+    ----------
+    config : EKFConfig
+    sensor : SensorNoise -- measurement noise of the plots
+    d : 2 or 3 -- spatial dimensions of the plots
+    range_rate : whether the plots carry range rate (used if ``config.use_range_rate``)
+    """
+
+    Config = EKFConfig
+
+    def __init__(
+        self,
+        config: EKFConfig | None = None,
+        sensor: SensorNoise | None = None,
+        d: int = 2,
+        range_rate: bool = False,
+    ) -> None:
+        self.config = config or EKFConfig()
+        self.sensor = sensor or SensorNoise()
+        self.d = d
+        self.range_rate = bool(range_rate and self.config.use_range_rate)
+        self.model = measurement_model(d, 2 * d, self.range_rate)
+        self.R = measurement_noise(self.sensor, d, self.range_rate)
+        self._angular = self.model.angular.astype(float)
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        axes = ("x", "y", "z")[: self.d]
+        return axes + tuple("v" + a for a in axes)
+
+    def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
+        return TrackState.new(t, x, P)
+
+    def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
+        tt = np.broadcast_to(np.asarray(t, dtype=float), state.t.shape)
+        dt = tt - state.t
+        if np.any(dt < 0):
+            raise ValueError("predict: a track would go back in time")
+        F = cv_transition(dt, self.d)
+        Q = cv_noise(dt, self.config.q, self.d)
+        x, P = kalman.predict(state.x, state.P, F, Q)
+        nan = np.full(len(state), np.nan)
+        status = np.full(len(state), PlotStatus.PREDICTED, np.int8)
+        return state.replace(
+            t=tt.copy(), x=x, P=P, nis=nan, log_likelihood=nan.copy(), status=status
+        )
+
+    def _sensor(self, plots: Plots) -> FloatArray:
+        d = self.d
+        return np.concatenate([plots.sensor[:, :d], plots.sensor_vel[:, :d]], -1)
+
+    def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
+        s = self._sensor(plots)
+        H = self.model.jacobian(state.x, s)
+        y = plots.polar(self.range_rate) - self.model.h(state.x, s)
+        y = np.where(self._angular > 0, (y + np.pi) % (2 * np.pi) - np.pi, y)
+        S = H @ state.P @ np.swapaxes(H, -1, -2) + self.R
+        return y, kalman.symmetrize(S)
+
+    def update(self, state: TrackState, plots: Plots) -> TrackState:
+        s = self._sensor(plots)
+        z = plots.polar(self.range_rate)
+        ok = np.asarray(np.isfinite(z).all(-1) & np.isfinite(state.x).all(-1))
+        z = np.where(ok[:, None], z, self.model.h(state.x, s))
+        with np.errstate(all="ignore"):  # an absurd plot is rejected below, not warned about
+            res = kalman.extended_update(
+                state.x,
+                state.P,
+                z,
+                self.model.h(state.x, s),
+                self.model.jacobian(state.x, s),
+                self.R,
+                self._angular,
+                check=False,
+            )
+        return finish_update(state, res.x, res.P, res.nis, res.log_likelihood, state.t, ok=ok)
+
+    def columns(self, state: TrackState) -> dict[str, NDArray[Any]]:
+        return common_columns(state.x, state.P, self.d)

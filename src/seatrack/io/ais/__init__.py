@@ -27,6 +27,7 @@ from seatrack.io.ais.reports import (
     output_order,
     parse_times,
     rejection_counts,
+    to_local,
     validate_reports,
 )
 
@@ -49,6 +50,7 @@ __all__ = [
     "read_file",
     "rejection_counts",
     "track_columns",
+    "to_local",
     "track_files",
     "validate_reports",
     "write_tracks",

@@ -19,6 +19,7 @@ from datetime import UTC, datetime
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.geometry import LocalFrame, local_frames
 from seatrack.io.table import InputError
 
 FloatArray = NDArray[np.float64]
@@ -37,6 +38,7 @@ __all__ = [
     "MMSI_MAX",
     "TIME_MIN",
     "TIME_MAX",
+    "to_local",
 ]
 
 #: every reason a row can be rejected for (categorical; the line number is kept separately)
@@ -158,6 +160,12 @@ class AisReports:
         f = np.zeros(0)
         i = np.zeros(0, dtype=np.int64)
         return AisReports(sources, i, i, i, f, f, f, f, f, f, np.zeros(0, dtype=np.int8))
+
+
+def to_local(r: AisReports) -> LocalFrame:
+    """The usable rows in one tangent plane per vessel
+    (:func:`seatrack.geometry.local_frames`)."""
+    return local_frames(r.mmsi, r.lat, r.lon, r.valid)
 
 
 def mark(code: NDArray[np.int8], mask: NDArray[np.bool_], reason: str) -> None:

@@ -1,0 +1,82 @@
+"""The one configuration layer: edge units, unknown keys, types, bounds."""
+
+import math
+from dataclasses import dataclass
+
+import pytest
+
+from seatrack.config import ConfigError, describe, param, parse_config, to_edge
+
+
+@dataclass(frozen=True)
+class Demo:
+    q: float = param(1.0, unit="m^2/s^3", doc="accel PSD", min=0)
+    sigma_azimuth: float = param(
+        0.5, key="sigma_azimuth_deg", unit="deg", doc="az", min=0, exclusive_min=True
+    )
+    speed: float = param(10.0, key="speed_kn", unit="kn", aliases=("speed_knots",))
+    mode: str = param("a", choices=("a", "b"))
+    flag: bool = param(True)
+    count: int = param(3, min=1)
+    alphas: tuple[float, ...] = param((1.0, 2.0), unit="g")
+
+    def __post_init__(self) -> None:
+        if self.count > 100:
+            raise ValueError("count must be <= 100")
+
+
+def test_defaults_are_converted_to_si():
+    c = Demo()
+    assert c.sigma_azimuth == pytest.approx(math.radians(0.5))
+    assert c.speed == pytest.approx(10 * 1852 / 3600)
+    assert c.alphas == pytest.approx((9.80665, 2 * 9.80665))
+
+
+def test_user_keys_field_names_and_aliases():
+    c = parse_config(Demo, {"sigma_azimuth_deg": 2, "speed_knots": 1.0, "q": 3})
+    assert c.sigma_azimuth == pytest.approx(math.radians(2))
+    assert c.speed == pytest.approx(1852 / 3600)
+    assert c.q == 3.0
+    # the SI field name takes an SI value
+    assert parse_config(Demo, {"sigma_azimuth": 0.1}).sigma_azimuth == 0.1
+
+
+def test_round_trip_to_edge():
+    c = parse_config(Demo, {"sigma_azimuth_deg": 2.5, "alphas": [3, 4]})
+    assert parse_config(Demo, to_edge(c)) == c
+
+
+@pytest.mark.parametrize(
+    "table, message",
+    [
+        ({"sigma_rnage_m": 1}, "unknown key 'sigma_rnage_m'; valid keys: alphas, count"),
+        ({"q": "abc"}, "f.toml: q: expected a number, got 'abc'"),
+        ({"q": True}, "q: expected a number"),
+        ({"q": float("nan")}, "q: must be finite"),
+        ({"q": -1}, "q: must be >= 0"),
+        ({"sigma_azimuth_deg": 0}, "sigma_azimuth_deg: must be > 0"),
+        ({"mode": "c"}, "mode: must be one of a, b"),
+        ({"flag": 1}, "flag: expected true or false"),
+        ({"count": 2.5}, "count: expected an integer"),
+        ({"count": 101}, "f.toml: count must be <= 100"),
+        ({"speed_kn": 1, "speed_knots": 2}, "set the same parameter"),
+        ({"alphas": 3}, "alphas: expected a list"),
+    ],
+)
+def test_errors_name_file_and_key(table, message):
+    with pytest.raises(ConfigError) as exc:
+        parse_config(Demo, table, source="f.toml")
+    assert message in str(exc.value)
+    assert str(exc.value).startswith("f.toml: ")
+
+
+def test_ignore_and_base():
+    base = parse_config(Demo, {"q": 5})
+    c = parse_config(Demo, {"count": 4, "other": 1}, base=base, ignore=("other",))
+    assert (c.q, c.count) == (5.0, 4)
+
+
+def test_describe_lists_edge_defaults():
+    rows = {r[0]: r for r in describe(Demo)}
+    assert rows["sigma_azimuth_deg"][1] == pytest.approx(0.5)
+    assert rows["sigma_azimuth_deg"][2] == "deg"

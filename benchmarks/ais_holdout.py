@@ -25,14 +25,15 @@ import numpy as np
 from ais import DATA  # the real files, as in benchmarks/ais.py
 from ais import REAL as FILES
 from seatrack.evaluate.holdout import ais_holdout
-from seatrack.io.ais import read_ais_csv, to_local
+from seatrack.geometry import local_frames
+from seatrack.io.ais import read_ais_csv
 
 
 def time_residuals(r) -> np.ndarray:  # type: ignore[no-untyped-def]
     """Along-chord residual / chord speed (s) of moving reports with close neighbours."""
     ok = np.flatnonzero(r.valid)
     o = ok[np.lexsort((r.t[ok], r.mmsi[ok]))]
-    m, t, E = r.mmsi[o], r.t[o], to_local(r).enu[o, :2]
+    m, t, E = r.mmsi[o], r.t[o], local_frames(r.mmsi, r.lat, r.lon, r.valid).enu[o, :2]
     i = np.arange(1, o.size - 1)
     i = i[(m[i - 1] == m[i]) & (m[i + 1] == m[i]) & (t[i + 1] - t[i - 1] <= 25)]
     i = i[(t[i + 1] > t[i]) & (t[i] > t[i - 1])]

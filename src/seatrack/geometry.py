@@ -18,6 +18,7 @@ All functions are pure and broadcast over leading array dimensions.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
@@ -200,18 +201,131 @@ def enu_to_geodetic(
     Inverse of :func:`geodetic_to_enu` (one origin, or one per point); returns degrees,
     degrees, metres.
     """
-    _, inv = _transformers()
     e = np.asarray(enu, dtype=float)
     if e.shape[-1] == 2:
         e = np.concatenate([e, np.zeros(e.shape[:-1] + (1,))], axis=-1)
-    X0, Y0, Z0, (sl, cl, so, co) = _origin(lat0_deg, lon0_deg, h0_m)
-    E, N, U = e[..., 0], e[..., 1], e[..., 2]
+    return _enu_to_geodetic_at(e[..., 0], e[..., 1], e[..., 2], _origin(lat0_deg, lon0_deg, h0_m))
+
+
+def _enu_to_geodetic_at(
+    E: FloatArray, N: FloatArray, U: FloatArray, origin: tuple[Any, ...]
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """:func:`enu_to_geodetic` about an origin computed by :func:`_origin`."""
+    _, inv = _transformers()
+    X0, Y0, Z0, (sl, cl, so, co) = origin
     # the transposed rotation
     X = -so * E - sl * co * N + cl * co * U + X0
     Y = co * E - sl * so * N + cl * so * U + Y0
     Z = cl * N + sl * U + Z0
     lon, lat, h = inv.transform(X, Y, Z)
     return np.asarray(lat, float), np.asarray(lon, float), np.asarray(h, float)
+
+
+# ---------------------------------------------------------------------------
+# Local frames of many objects (one tangent-plane origin per object)
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class LocalFrame:
+    """Per-row local East-North-Up coordinates about one origin per object.
+
+    Attributes
+    ----------
+    enu : ndarray (N, 3)
+        East, North, Up (m) of each valid row (NaN for the others).
+    lat0, lon0 : ndarray (N,)
+        Origin (deg) of the row's object frame (the object's first valid row).
+    group : ndarray of int (N,)
+        Index of the row's object among the sorted distinct keys (-1 for invalid rows).
+    """
+
+    enu: FloatArray
+    lat0: FloatArray
+    lon0: FloatArray
+    group: NDArray[np.int64] | None = None
+
+
+def local_frames(
+    key: ArrayLike, lat_deg: ArrayLike, lon_deg: ArrayLike, valid: ArrayLike
+) -> LocalFrame:
+    """Valid rows to a local East-North-Up frame, one tangent-plane origin per ``key``
+    (e.g. per vessel): the key's first valid row, heights 0 (sea level).
+
+    A per-object origin keeps the tangent plane close to the track (a common origin would
+    rotate North by the meridian convergence, degrees over a few hundred km). All rows in
+    one vectorised :func:`geodetic_to_enu` call.
+    """
+    k = np.asarray(key)
+    lat = np.asarray(lat_deg, dtype=float)
+    lon = np.asarray(lon_deg, dtype=float)
+    n = lat.size
+    enu = np.full((n, 3), np.nan)
+    lat0 = np.full(n, np.nan)
+    lon0 = np.full(n, np.nan)
+    ok = np.flatnonzero(np.asarray(valid, dtype=bool))
+    group = np.full(n, -1, dtype=np.int64)
+    if ok.size == 0:
+        return LocalFrame(enu, lat0, lon0, group)
+    keys, first = np.unique(k[ok], return_index=True)
+    group[ok] = np.searchsorted(keys, k[ok])
+    lat0[ok] = lat[ok[first]][group[ok]]
+    lon0[ok] = lon[ok[first]][group[ok]]
+    enu[ok] = geodetic_to_enu(lat[ok], lon[ok], 0.0, lat0[ok], lon0[ok])
+    return LocalFrame(enu, lat0, lon0, group)
+
+
+def local_to_geodetic(
+    east: ArrayLike,
+    north: ArrayLike,
+    lat0: ArrayLike,
+    lon0: ArrayLike,
+    iterations: int = 2,
+) -> tuple[FloatArray, FloatArray]:
+    """Tangent-plane (East, North) about per-row origins back to WGS84 (lat, lon) at sea
+    level; NaN inputs give NaN outputs.
+
+    The Up coordinate of the sea-level point is found by fixed-point iteration
+    ``U <- U - h(E, N, U)`` starting from the spherical ``-(E^2+N^2)/(2 R)``; that start is
+    within metres of the ellipsoid at 100 km, which moves lat/lon by centimetres; one
+    iteration brings it to the millimetre, two to well below 0.1 mm. All rows in one
+    vectorised :func:`enu_to_geodetic` call (per-row origins).
+    """
+    e = np.asarray(east, float)
+    nn = np.asarray(north, float)
+    la0_all = np.asarray(lat0, float)
+    lo0_all = np.asarray(lon0, float)
+    lat = np.full(e.shape, np.nan)
+    lon = np.full(e.shape, np.nan)
+    ok = np.isfinite(e) & np.isfinite(nn) & np.isfinite(la0_all) & np.isfinite(lo0_all)
+    if not ok.any():
+        return lat, lon
+    E, N = e[ok], nn[ok]
+    la0, lo0 = la0_all[ok], lo0_all[ok]
+    U = -(E**2 + N**2) / (2.0 * 6_371_000.0)
+    origin = _origin(la0, lo0, 0.0)  # once for all iterations
+    for _ in range(iterations):
+        _, _, h = _enu_to_geodetic_at(E, N, U, origin)
+        U = U - h
+    lat[ok], lon[ok], _ = _enu_to_geodetic_at(E, N, U, origin)
+    return lat, lon
+
+
+def north_convergence(
+    lat_deg: ArrayLike, lon_deg: ArrayLike, lat0_deg: ArrayLike, lon0_deg: ArrayLike
+) -> Any:
+    """Bearing (rad) of true North at (lat, lon) in the tangent plane of (lat0, lon0).
+
+    The geodetic North unit vector at the point, ``(-sin p cos l, -sin p sin l, cos p)``
+    in ECEF, projected on the plane's East and North axes (the rows of the ENU rotation of
+    :func:`geodetic_to_enu` at the origin); the angle is the meridian convergence between
+    the point and the frame origin (exact on the ellipsoid). 0 where not finite.
+    """
+    p, lam = np.radians(lat_deg), np.radians(lon_deg)
+    p0, l0 = np.radians(lat0_deg), np.radians(lon0_deg)
+    n = np.stack([-np.sin(p) * np.cos(lam), -np.sin(p) * np.sin(lam), np.cos(p)], -1)
+    e0 = np.stack([-np.sin(l0), np.cos(l0), np.zeros_like(l0)], -1)
+    n0 = np.stack([-np.sin(p0) * np.cos(l0), -np.sin(p0) * np.sin(l0), np.cos(p0)], -1)
+    gam = bearing(np.sum(n * e0, -1), np.sum(n * n0, -1))
+    return np.where(np.isfinite(gam), gam, 0.0)
 
 
 # ---------------------------------------------------------------------------

@@ -97,13 +97,6 @@ def test_options(tmp_path_factory, option, value):
     _run(tmp_path_factory.mktemp("aisopt"), CSV_TEXT.encode(), "a.csv", option, value)
 
 
-ACCOUNTING = pytest.mark.xfail(
-    reason="issue 13 item 3 (every AIS line accounted for): the AIS work package; strict, "
-    "so this marker goes when that work lands",
-    strict=True,
-)
-
-
 @settings(max_examples=60, deadline=None)
 @given(data=st.data(), nmea=st.booleans())
 def test_every_input_line_is_accounted_for(tmp_path_factory, data, nmea):
@@ -116,8 +109,8 @@ def test_every_input_line_is_accounted_for(tmp_path_factory, data, nmea):
 @pytest.mark.parametrize(
     ("case", "nmea"),
     [
-        pytest.param("blank", False, marks=ACCOUNTING),
-        pytest.param("empty_cells", False, marks=ACCOUNTING),
+        ("blank", False),
+        ("empty_cells", False),
         ("garbage", False),
         ("blank", True),
         ("cut", True),
@@ -136,7 +129,6 @@ def test_item_3_lines_are_accounted_for(tmp_path, case, nmea):
     assert code == 0 and rows + skipped == _records(raw, nmea), (rows, skipped)
 
 
-@ACCOUNTING
 @pytest.mark.parametrize(
     ("column", "value"),
     [("mmsi", "1e30"), ("mmsi", "99999999999999999999"), ("time_utc", "1e308")],  # fmt: skip

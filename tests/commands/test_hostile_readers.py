@@ -58,16 +58,7 @@ def _read(reader: Callable[[Path], object], path: Path) -> None:
         assert "\n" not in str(exc).strip()
 
 
-AIS_ENCODING = pytest.mark.xfail(
-    reason="issue 13 item 9 in io.ais (header read as strict UTF-8: UnicodeDecodeError): the "
-    "AIS work package (io.table.decode_text is there to use); strict",
-    strict=True,
-)
-
-
-@pytest.mark.parametrize(
-    "name", [pytest.param(n, marks=AIS_ENCODING) if n == "ais" else n for n in sorted(READERS)]
-)
+@pytest.mark.parametrize("name", sorted(READERS))
 def test_csv_readers(texts, tmp_path_factory, name):
     d = tmp_path_factory.mktemp(name)
 
@@ -97,7 +88,6 @@ def test_nmea_reader(tmp_path_factory, data):
     _read(lambda q: read_ais([q]), p)
 
 
-@AIS_ENCODING
 @pytest.mark.parametrize(
     ("name", "raw"),
     [("a.nmea", b"\x80"), ("a.csv", b"\xf8" + CSV_TEXT.encode()), ("b.csv", b"\xef\xbb\xbf\xf8")],

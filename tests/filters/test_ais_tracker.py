@@ -12,7 +12,7 @@ import pytest
 
 from ais_samples import FILES, data_file
 from seatrack.evaluate.holdout import ais_holdout
-from seatrack.filters.ais_tracker import (
+from seatrack.filters.ais import (
     AisTrackerConfig,
     ct_step,
     position_noise,
@@ -21,8 +21,8 @@ from seatrack.filters.ais_tracker import (
     track_reports,
     track_vessels,
 )
-from seatrack.geometry import KNOT_MPS, angle_diff, bearing
-from seatrack.io.ais import AisReports, read_ais_csv, to_local
+from seatrack.geometry import KNOT_MPS, angle_diff, bearing, local_frames
+from seatrack.io.ais import AisReports, read_ais_csv
 from seatrack.models import numerical_jacobian
 from seatrack.models.motion import ct_jacobian, ct_noise, ct_transition
 from seatrack.simulate import Leg, trajectory
@@ -178,7 +178,7 @@ def test_real_every_row_accounted_for(name: str) -> None:
     )
     assert not tr.outlier[~r.valid].any()
     # smoothed positions stay near the used reports (here: within 100 m for 99.9 %)
-    fr = to_local(r)
+    fr = local_frames(r.mmsi, r.lat, r.lon, r.valid)
     used = ok & ~tr.outlier
     d = np.hypot(tr.x_m[used] - fr.enu[used, 0], tr.y_m[used] - fr.enu[used, 1])
     assert np.quantile(d, 0.999) < 100.0
@@ -195,7 +195,7 @@ def _sorted_valid(r: AisReports) -> np.ndarray:
 def test_real_known_glitches_are_flagged(name: str) -> None:
     r, tr = tracked(name)
     o = _sorted_valid(r)
-    E = to_local(r).enu[o, :2]
+    E = local_frames(r.mmsi, r.lat, r.lon, r.valid).enu[o, :2]
     m, t, fl = r.mmsi[o], r.t[o], tr.outlier[o]
     d0 = CFG.n_sigma * math.sqrt(2) * CFG.sigma_pos_m
     same = m[1:] == m[:-1]
@@ -241,7 +241,7 @@ def test_real_flagged_reports_are_implausible(name: str) -> None:
     """Independent check of every flag against the accepted reports around it."""
     r, tr = tracked(name)
     o = _sorted_valid(r)
-    E = to_local(r).enu[o, :2]
+    E = local_frames(r.mmsi, r.lat, r.lon, r.valid).enu[o, :2]
     m, t, kind = r.mmsi[o], r.t[o], tr.outlier_kind[o]
     acc = kind == 0
     d0 = CFG.n_sigma * math.sqrt(2) * CFG.sigma_pos_m
@@ -462,7 +462,7 @@ def test_refinement_settings_are_checked(bad: dict) -> None:
 def test_compiled_two_d_update_equals_the_kalman_core() -> None:
     """The tracker's 2-D Joseph update (position with offset, SOG/COG rows) equals
     seatrack.kalman.update_core on random states, covariances and measurement matrices."""
-    from seatrack.filters.ais_tracker import _update2
+    from seatrack.filters.ais.ct import update2 as _update2
     from seatrack.kalman import update_core
 
     rng = np.random.default_rng(8)
@@ -635,3 +635,22 @@ def test_real_states_stay_within_physical_limits(name: str) -> None:
     with np.errstate(divide="ignore"):
         lim = np.minimum(math.radians(CFG.max_turn_rate_dps), CFG.max_accel_mps2 / tr.speed[ok])
     assert np.all(np.abs(tr.turn_rate[ok]) <= lim * (1 + 1e-9))
+
+
+def test_vessel_groups_share_the_offset_prior_and_equal_one_table() -> None:
+    """Tracking vessels in groups (bounded memory, Dask partitions) gives the result of one
+    table: the timestamp-offset prior is estimated from the counts of all groups."""
+    from seatrack.filters.ais.tracker import VesselInputs, track_vessel_groups
+
+    r, _ = tracked("dk_northsea_20221101_1h_selected.csv")
+    ok = r.valid
+    fr = local_frames(r.mmsi, r.lat, r.lon, ok)
+    m, t, xy = r.mmsi[ok], r.t[ok], fr.enu[ok, :2]
+    whole = track_vessels(m, t, xy, CFG)
+    vessels = np.unique(m)
+    parts = [np.isin(m, vessels[k::3]) for k in range(3)]
+    groups = track_vessel_groups([VesselInputs(m[p], t[p], xy[p]) for p in parts], CFG)
+    assert np.count_nonzero(whole.time_offset) > 100  # the prior matters on this file
+    for p, g in zip(parts, groups, strict=True):
+        for f in ("state", "std", "outlier_kind", "segment", "nis", "time_offset"):
+            assert np.array_equal(getattr(whole, f)[p], getattr(g, f), equal_nan=True), f

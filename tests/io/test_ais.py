@@ -9,16 +9,15 @@ import numpy as np
 import pytest
 
 from ais_samples import FILES, data_file
+from seatrack.geometry import local_frames, local_to_geodetic
 from seatrack.io.ais import (
     REJECT_REASONS,
     detect_schema,
-    from_local,
     output_order,
     parse_times,
     read_ais,
     read_ais_csv,
     rejection_counts,
-    to_local,
     write_tracks_csv,
 )
 from seatrack.io.table import InputError
@@ -212,12 +211,12 @@ def test_time_formats() -> None:
 
 def test_local_frame_round_trip_per_vessel() -> None:
     r = read_ais_csv(data_file("no_vestland_20220901.csv"))
-    fr = to_local(r)
+    fr = local_frames(r.mmsi, r.lat, r.lon, r.valid)
     # one origin per vessel: the vessel's first report maps to (0, 0)
     for m in np.unique(r.mmsi):
         i = np.flatnonzero(r.mmsi == m)[0]
         assert np.allclose(fr.enu[i], 0.0, atol=1e-6)
-    lat, lon = from_local(fr.enu[:, 0], fr.enu[:, 1], fr.lat0, fr.lon0)
+    lat, lon = local_to_geodetic(fr.enu[:, 0], fr.enu[:, 1], fr.lat0, fr.lon0)
     assert np.abs(lat - r.lat).max() < 1e-9 and np.abs(lon - r.lon).max() < 1e-9
     # the longest track (350 km) spans > 100 km from its origin: the round trip is exact
     assert np.hypot(fr.enu[:, 0], fr.enu[:, 1]).max() > 1e5
@@ -226,11 +225,11 @@ def test_local_frame_round_trip_per_vessel() -> None:
 def test_from_local_with_a_vessel_without_estimates() -> None:
     """A vessel none of whose rows has an estimate (all NaN) must not break the others."""
     r = read_ais_csv(data_file("no_vestland_20220901.csv"))
-    fr = to_local(r)
+    fr = local_frames(r.mmsi, r.lat, r.lon, r.valid)
     east, north = fr.enu[:, 0].copy(), fr.enu[:, 1].copy()
     first = r.mmsi == np.unique(r.mmsi)[0]
     east[first] = np.nan
-    lat, lon = from_local(east, north, fr.lat0, fr.lon0)
+    lat, lon = local_to_geodetic(east, north, fr.lat0, fr.lon0)
     assert np.isnan(lat[first]).all()
     assert np.abs(lat[~first] - r.lat[~first]).max() < 1e-9
 

@@ -10,7 +10,9 @@ from pyais.util import compute_checksum
 
 from ais_samples import data_file
 from seatrack.io.ais import format_times, read_ais, read_ais_csv
-from seatrack.io.nmea import looks_like_nmea, nmea_checksum, read_nmea
+from seatrack.io.ais.nmea import nmea_checksum
+from seatrack.io.ais.read import looks_like_nmea
+from seatrack.io.ais.read import read_ais_csv as read_nmea
 
 
 def _tag(t: float) -> str:
@@ -112,6 +114,7 @@ def test_bad_lines_are_rejected_or_counted(tmp_path: Path) -> None:
     assert got == {
         1: "",
         2: "bad checksum",
+        3: "blank line",
         4: "incomplete multi-sentence message",
         8: "unparsable time",
         9: "lat not available (91)",
@@ -120,7 +123,6 @@ def test_bad_lines_are_rejected_or_counted(tmp_path: Path) -> None:
         12: "duplicate report",
     }
     assert r.skipped == {
-        "blank line": 1,
         "continuation fragment": 1,
         "not a position report (type 5)": 1,
         "not an AIS sentence": 1,

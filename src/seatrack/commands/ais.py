@@ -1,19 +1,25 @@
 """``seatrack ais``: clean and smooth real AIS tracks of many vessels at once.
 
-``seatrack ais INPUT... --out TRACKS.csv [--geojson FILE] [--html FILE]``
+``seatrack ais INPUT... --out TRACKS.csv|TRACKS.parquet [--geojson FILE] [--html FILE]``
 
 INPUT files are AIS CSV exports (common / DMA / NOAA MarineCadastre columns, detected by
-header) or timestamped NMEA ``!AIVDM`` logs (detected by content). By default all files
-are read into one table (a vessel seen in several files is one track) and tracked in
-process. With ``--dask`` each file is read and tracked as its own Dask task (vessels are
-then *not* merged across files); Dask is imported only then (``pip install seatrack[dask]``).
+header; plain or ``.gz``/``.zst``/``.bz2``), Parquet files with those columns, or
+timestamped NMEA ``!AIVDM`` logs (detected by content). A vessel seen in several files is one
+track. By default the files are tracked in this process within ``--memory-limit``
+(:mod:`seatrack.io.ais.pipeline`: vessels in groups, all cores); with ``--dask`` all reports
+are shuffled by MMSI over a Dask cluster (:mod:`seatrack.io.ais.cluster`; a local cluster,
+or ``--scheduler ADDRESS``), with the same output.
 
-TRACKS.csv has one row per input report, vessels in order of first appearance and input
-order within each vessel; rejected rows keep their place with ``reject_reason`` set.
+TRACKS has one row per input line that can hold a report, vessels in order of first
+appearance and input order within each vessel; rejected rows keep their place with
+``reject_reason`` set. All output paths are checked before any work, and every file is
+written atomically.
 """
 
 from __future__ import annotations
 
+import math
+import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -21,112 +27,143 @@ from typing import Any
 import numpy as np
 import typer
 
+from seatrack.io.table import InputError
 
-def _track_one(paths: Sequence[str], config: Any) -> tuple[Any, Any]:
-    from seatrack.filters.ais_tracker import track_reports
+_SIZE = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*([kmgt]?)i?b?\s*$", re.IGNORECASE)
+
+
+def parse_size(text: str, option: str = "--memory-limit") -> int:
+    """``"1.5G"``, ``"800M"``, ``"2GB"`` or a number of bytes -> bytes (at least 64 MiB)."""
+    m = _SIZE.match(text)
+    if m is None:
+        raise InputError(f"{option}: expected a size such as 2G or 800M, got {text!r}")
+    scale = {"": 1, "k": 1 << 10, "m": 1 << 20, "g": 1 << 30, "t": 1 << 40}
+    value = float(m.group(1)) * scale[m.group(2).lower()]
+    if not math.isfinite(value) or value < 64 << 20:
+        raise InputError(f"{option}: must be at least 64M, got {text!r}")
+    return int(value)
+
+
+def tracker_config(
+    sigma_pos: float, max_gap: float, max_speed: float, max_accel: float, smooth: bool
+) -> Any:
+    """The tracker configuration of the command's options (each checked, by name)."""
+    from seatrack.commands.options import option_positive
+    from seatrack.filters.ais import AisTrackerConfig
+
+    option_positive("--sigma-pos", sigma_pos, 1e4)
+    option_positive("--max-gap", max_gap, 1e9)
+    option_positive("--max-speed", max_speed, 1e4)
+    option_positive("--max-accel", max_accel, 1e3)
+    if sigma_pos < AisTrackerConfig.sigma_pos_min_m:
+        raise InputError(
+            f"--sigma-pos: must be at least {AisTrackerConfig.sigma_pos_min_m} m, got {sigma_pos}"
+        )
+    return AisTrackerConfig(
+        sigma_pos_m=sigma_pos,
+        max_gap_s=max_gap,
+        max_speed_kn=max_speed,
+        max_accel_mps2=max_accel,
+        smooth=smooth,
+    )
+
+
+def map_tracks(reports: Any, tracks: Any) -> list[Any]:
+    """The map's :class:`~seatrack.report.html.VesselTrack` per vessel from
+    :class:`~seatrack.io.ais.AisReports` and their
+    :class:`~seatrack.filters.ais.AisTracks` (raw and smoothed positions)."""
+    from seatrack.report.html import vessel_tracks
+
+    return vessel_tracks(
+        reports.mmsi,
+        reports.t,
+        reports.lat,
+        reports.lon,
+        tracks.lat,
+        tracks.lon,
+        tracks.segment,
+        tracks.outlier,
+        reports.valid,
+    )
+
+
+def _check_outputs(out: Path, extra: Sequence[Path | None], use_dask: bool) -> None:
+    """Check every output path before any work (a bad one fails fast)."""
+    from seatrack.commands.options import prepare_outputs
+
+    paths = [p for p in (out, *extra) if p is not None]
+    names = [str(Path(p).resolve()) for p in paths]
+    if len(set(names)) != len(names):
+        raise InputError("--out, --geojson and --html must be different files")
+    if use_dask and out.suffix.lower() not in (".parquet", ".pq", ".csv"):
+        raise InputError(f"--out: with --dask, give a .csv file or a .parquet folder, got {out}")
+    prepare_outputs(paths)
+
+
+def run(
+    inputs: Sequence[Path],
+    out: Path,
+    cfg: Any,
+    memory_limit: int,
+    geojson: Path | None = None,
+    html: Path | None = None,
+    tile_url: str | None = None,
+    use_dask: bool = False,
+    scheduler: str | None = None,
+) -> list[str]:
+    """Track ``inputs`` into ``out`` (and the map files); returns the summary lines."""
+    want_map = geojson is not None or html is not None
+    maps: list[Any] = []
+
+    def collect(r: Any, tr: Any) -> None:
+        maps.extend(map_tracks(r, tr))
+
+    if use_dask:
+        if want_map:
+            raise InputError("--geojson and --html are not available with --dask")
+        from seatrack.io.ais.cluster import track_files_dask
+
+        summary = track_files_dask(inputs, out, cfg, scheduler=scheduler)
+    else:
+        from seatrack.io.ais.pipeline import track_files
+
+        summary = track_files(
+            inputs, out, cfg, memory_limit=memory_limit, on_group=collect if want_map else None
+        )
+    lines = summary.lines()
+    # the map files through io.atomic whatever the report module does with a path
+    from seatrack.io.atomic import atomic_path
+
+    if geojson is not None:
+        from seatrack.report.html import write_geojson
+
+        with atomic_path(geojson) as tmp:
+            write_geojson(tmp, maps)
+    if html is not None:
+        from seatrack.report.html import write_html
+
+        with atomic_path(html) as tmp:
+            write_html(
+                tmp,
+                maps,
+                title=f"AIS tracks: {', '.join(p.name for p in inputs)}",
+                summary="; ".join(lines),
+                tile_url=tile_url,
+            )
+    lines.append(f"wrote {out} ({summary.rows} rows)")
+    lines += [f"wrote {p}" for p in (geojson, html) if p is not None]
+    return lines
+
+
+def track_files(paths: Sequence[str | Path], config: Any = None) -> tuple[Any, Any]:
+    """Read and track AIS files in memory (a vessel seen in several files is one track);
+    returns ``(AisReports, AisTracks)`` row-aligned. For files of any size use
+    :func:`seatrack.io.ais.track_files` (bounded memory, writes TRACKS)."""
+    from seatrack.filters.ais import AisTrackerConfig, track_reports
     from seatrack.io.ais import read_ais
 
     reports = read_ais(list(paths))
-    return reports, track_reports(reports, config)
-
-
-def track_files(
-    paths: Sequence[str | Path], config: Any = None, use_dask: bool = False
-) -> tuple[Any, Any]:
-    """Read and track AIS files; returns ``(AisReports, AisTracks)`` row-aligned.
-
-    ``use_dask``: one Dask task per file (vessels not merged across files; the results are
-    concatenated in file order). Dask is imported lazily.
-    """
-    from seatrack.filters.ais_tracker import AisTrackerConfig
-
-    cfg = config or AisTrackerConfig()
-    names = [str(p) for p in paths]
-    if not use_dask or len(names) == 1:
-        return _track_one(names, cfg)
-    try:
-        import dask
-    except ImportError:
-        raise ValueError("--dask needs the 'dask' package: pip install 'seatrack[dask]'") from None
-    from seatrack.io.ais import concat_reports
-
-    parts = dask.compute(*[dask.delayed(_track_one)([p], cfg) for p in names])
-    reports = concat_reports([p[0] for p in parts])
-    tr = [p[1] for p in parts]
-    fields = type(tr[0]).__dataclass_fields__
-    tracks = type(tr[0])(**{f: np.concatenate([getattr(x, f) for x in tr]) for f in fields})
-    # segment ids are per file: make them unique
-    offset = 0
-    seg = tracks.segment
-    start = 0
-    for x in tr:
-        n = x.segment.size
-        s = seg[start : start + n]
-        s[s >= 0] += offset
-        offset = int(max(offset, s.max(initial=offset) + 1))
-        start += n
-    return reports, tracks
-
-
-def track_columns(tracks: Any) -> dict[str, np.ndarray]:
-    """TRACKS.csv value columns (degrees / knots) from :class:`AisTracks`."""
-    from seatrack.filters.ais_tracker import OUTLIER_KINDS
-    from seatrack.geometry import bearing_rad_to_deg, mps_to_knots
-
-    course = np.asarray(tracks.course, float)
-    course_deg = np.full(course.shape, np.nan)
-    ok = np.isfinite(course)
-    course_deg[ok] = bearing_rad_to_deg(course[ok])
-    return {
-        "lat": tracks.lat,
-        "lon": tracks.lon,
-        "course_deg": course_deg,
-        "speed_kn": mps_to_knots(tracks.speed),
-        "turn_rate_dps": np.degrees(tracks.turn_rate),
-        "std_pos_m": tracks.std_pos_m,
-        "std_course_deg": np.degrees(tracks.std_course),
-        "std_speed_kn": mps_to_knots(tracks.std_speed),
-        "std_turn_rate_dps": np.degrees(tracks.std_turn_rate),
-        "x_m": tracks.x_m,
-        "y_m": tracks.y_m,
-        "time_offset_s": tracks.time_offset_s,
-        "outlier": tracks.outlier,
-        "outlier_reason": np.array(
-            [OUTLIER_KINDS.get(int(k), "") for k in tracks.outlier_kind], dtype=object
-        ),
-        "segment": tracks.segment,
-    }
-
-
-def summary_lines(reports: Any, tracks: Any) -> list[str]:
-    """Rows read / used / rejected by reason, outliers, vessels, segments, reports with a
-    timestamp offset."""
-    from seatrack.io.ais import rejection_counts
-
-    n = len(reports)
-    valid = reports.valid
-    n_out = int(np.count_nonzero(tracks.outlier))
-    used = int(np.count_nonzero(valid)) - n_out
-    vessels = np.unique(reports.mmsi[valid]).size
-    segs = np.unique(tracks.segment[tracks.segment >= 0]).size
-    lines = [
-        f"rows read: {n}",
-        f"rows used: {used}",
-        f"outliers (flagged, not used): {n_out}",
-        f"rows rejected: {n - int(np.count_nonzero(valid))}",
-    ]
-    lines += [f"  {reason}: {k}" for reason, k in rejection_counts(reports).items()]
-    if reports.skipped:
-        lines.append(f"lines that are not position reports: {sum(reports.skipped.values())}")
-        lines += [f"  {k}: {v}" for k, v in sorted(reports.skipped.items())]
-    lines.append(f"vessels: {vessels}, track segments: {segs}")
-    off = np.asarray(tracks.time_offset_s, float)
-    n_off = int(np.count_nonzero(np.isfinite(off) & (off != 0)))
-    if used:
-        lines.append(
-            f"reports with a whole-second timestamp offset: {n_off} ({100 * n_off / used:.1f} %)"
-        )
-    return lines
+    return reports, track_reports(reports, config or AisTrackerConfig())
 
 
 def not_utf8(paths: Sequence[Path]) -> Exception:
@@ -145,13 +182,18 @@ def not_utf8(paths: Sequence[Path]) -> Exception:
 
 def register(app: typer.Typer) -> None:
     """Add the ``ais`` sub-command to ``app``."""
+    from seatrack.io.ais.pipeline import DEFAULT_MEMORY_LIMIT
 
     @app.command("ais")
     def ais(
         inputs: list[Path] = typer.Argument(
-            ..., help="AIS CSV files (common/DMA/NOAA columns) or timestamped NMEA logs"
+            ...,
+            help="AIS CSV files (common/DMA/NOAA columns; .gz/.zst allowed), Parquet files "
+            "or timestamped NMEA logs",
         ),
-        out: Path = typer.Option(..., "--out", "-o", help="TRACKS.csv to write"),
+        out: Path = typer.Option(
+            ..., "--out", "-o", help="TRACKS file to write: .csv, or .parquet"
+        ),
         geojson: Path | None = typer.Option(None, "--geojson", help="GeoJSON file to write"),
         html: Path | None = typer.Option(None, "--html", help="offline HTML map to write"),
         sigma_pos: float = typer.Option(
@@ -173,51 +215,40 @@ def register(app: typer.Typer) -> None:
             "--tile-url",
             help="background tiles for the HTML map, e.g. https://.../{z}/{x}/{y}.png",
         ),
-        use_dask: bool = typer.Option(False, "--dask", help="one Dask task per input file"),
+        memory_limit: str = typer.Option(
+            f"{DEFAULT_MEMORY_LIMIT >> 30}G",
+            "--memory-limit",
+            help="peak memory to stay near (e.g. 1G, 800M): vessels are tracked in groups",
+        ),
+        use_dask: bool = typer.Option(
+            False, "--dask", help="track on a Dask cluster (all files shuffled by MMSI)"
+        ),
+        scheduler: str | None = typer.Option(
+            None, "--scheduler", help="Dask scheduler address (default: a local cluster)"
+        ),
     ) -> None:
         """Track vessels in AIS logs: smoothed position, course, speed, turn rate, outliers."""
-        from seatrack.commands.options import option_positive, prepare_outputs
-        from seatrack.filters.ais_tracker import AisTrackerConfig
-        from seatrack.io.ais import write_tracks_csv
-        from seatrack.io.atomic import atomic_path
-
-        option_positive("--sigma-pos", sigma_pos, 1e4)
-        option_positive("--max-gap", max_gap, 1e9)
-        option_positive("--max-speed", max_speed, 1e4)
-        option_positive("--max-accel", max_accel, 1e3)
-        cfg = AisTrackerConfig(
-            sigma_pos_m=sigma_pos,
-            max_gap_s=max_gap,
-            max_speed_kn=max_speed,
-            max_accel_mps2=max_accel,
-            smooth=not no_smooth,
-        )
-        prepare_outputs([out, geojson, html])
-        try:
-            reports, tracks = track_files(inputs, cfg, use_dask=use_dask)
-        except UnicodeDecodeError:
-            raise not_utf8(inputs) from None
-        with atomic_path(out) as tmp:
-            n = write_tracks_csv(tmp, reports, track_columns(tracks))
-        lines = summary_lines(reports, tracks)
-        for ln in lines:
+        cfg = tracker_config(sigma_pos, max_gap, max_speed, max_accel, not no_smooth)
+        limit = parse_size(memory_limit)
+        if scheduler is not None and not use_dask:
+            raise InputError("--scheduler needs --dask")
+        if use_dask and (geojson is not None or html is not None):
+            raise InputError("--geojson and --html are not available with --dask")
+        if tile_url is not None and "{z}" not in tile_url:
+            raise InputError(f"--tile-url: needs {{z}}, {{x}} and {{y}}, got {tile_url!r}")
+        _check_outputs(out, [geojson, html], use_dask)
+        for p in inputs:
+            if not p.exists():
+                raise InputError(f"{p}: file not found")
+            if not p.is_file():
+                raise InputError(f"{p}: not a file")
+        for ln in run(inputs, out, cfg, limit, geojson, html, tile_url, use_dask, scheduler):
             typer.echo(ln)
-        typer.echo(f"wrote {out} ({n} rows)")
-        if geojson is not None or html is not None:
-            from seatrack.report.html import map_tracks, write_geojson, write_html
 
-            vt = map_tracks(reports, tracks)
-            if geojson is not None:
-                with atomic_path(geojson) as tmp:
-                    write_geojson(tmp, vt)
-                typer.echo(f"wrote {geojson}")
-            if html is not None:
-                with atomic_path(html) as tmp:
-                    write_html(
-                        tmp,
-                        vt,
-                        title=f"AIS tracks: {', '.join(p.name for p in inputs)}",
-                        summary="; ".join(lines),
-                        tile_url=tile_url,
-                    )
-                typer.echo(f"wrote {html}")
+
+def track_columns(tracks: Any) -> dict[str, np.ndarray]:
+    """TRACKS value columns from :class:`~seatrack.filters.ais.AisTracks` (see
+    :func:`seatrack.io.ais.output.track_columns`)."""
+    from seatrack.io.ais.output import track_columns as columns
+
+    return columns(tracks)

@@ -52,8 +52,8 @@ def ais_holdout(reports: Any, config: Any = None, every: int = 5, phase: int = 4
     every, phase : int
         Group size and the withheld position in each group (``0 <= phase < every``).
     """
-    from seatrack.filters.ais_tracker import track_reports
-    from seatrack.io.ais import to_local
+    from seatrack.filters.ais import track_reports
+    from seatrack.geometry import local_frames
 
     if not 0 <= phase < every:
         raise ValueError(f"need 0 <= phase < every, got phase={phase}, every={every}")
@@ -66,7 +66,7 @@ def ais_holdout(reports: Any, config: Any = None, every: int = 5, phase: int = 4
     use = np.ones(len(reports), dtype=bool)
     use[o[held]] = False
     tr = track_reports(reports, config, use=use)
-    E = to_local(reports).enu[:, :2]
+    E = local_frames(reports.mmsi, reports.lat, reports.lon, reports.valid).enu[:, :2]
     pos = np.arange(o.size)
     prev = np.maximum.accumulate(np.where(~held, pos, -1))
     nxt = np.minimum.accumulate(np.where(~held, pos, o.size)[::-1])[::-1]

@@ -1,4 +1,4 @@
-"""Raw NMEA ``!AIVDM`` / ``!AIVDO`` logs with timestamps -> :class:`~seatrack.io.ais.AisReports`.
+"""Raw NMEA ``!AIVDM`` / ``!AIVDO`` sentences with timestamps -> AIS report rows.
 
 Each line holds one NMEA 0183 sentence with its time, given either as
 
@@ -8,13 +8,16 @@ Each line holds one NMEA 0183 sentence with its time, given either as
   (``2022-11-01T09:35:36Z``), DMA style (``01/11/2022 09:35:36``) or epoch seconds.
 
 Sentence checksums (and tag-block checksums) are verified here; a line with a wrong one is
-rejected as ``"bad checksum"``. Multi-sentence messages are assembled per
-(talker, channel, sequence id, fragment count) and decoded with ``pyais``; the message time
-is the first fragment's (a later fragment's if only that one carries it) and its line is
-the first fragment's line. Position reports (types 1, 2, 3, 18, 19, 27) become rows;
-other lines are counted in :attr:`AisReports.skipped` by kind, so that
-``len(reports) + sum(skipped.values())`` equals the number of lines in the file.
-"""
+rejected as ``"bad checksum"``, a sentence without its ``*hh`` checksum or with fewer than
+seven fields (cut mid-payload) as ``"truncated sentence"``. Multi-sentence messages are
+assembled per (talker, channel, sequence id, fragment count) and decoded with ``pyais``; the
+message time is the first fragment's (a later fragment's if only that one carries it) and
+its line is the first fragment's line. Position reports (types 1, 2, 3, 18, 19, 27) become
+rows; other message types and other NMEA sentences are counted in
+:attr:`~seatrack.io.ais.reports.AisReports.skipped` by kind. Files are read line by line by
+:mod:`seatrack.io.ais.lines`, which gives blank and foreign lines (CSV rows without a
+header, text) a rejected row of their own and reads CSV rows that follow a CSV header in the
+same file."""
 
 from __future__ import annotations
 
@@ -22,15 +25,13 @@ import re
 from dataclasses import dataclass, field
 from functools import reduce
 from operator import xor
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from seatrack.io.ais import AisReports, parse_times, validate_reports
-from seatrack.io.table import InputError
+from seatrack.io.ais.reports import parse_times
 
-__all__ = ["POSITION_TYPES", "looks_like_nmea", "read_nmea", "parse_nmea_lines", "nmea_checksum"]
+__all__ = ["POSITION_TYPES", "NmeaRow", "is_nmea_line", "nmea_checksum", "nmea_rows"]
 
 #: AIS message types that carry a position report
 POSITION_TYPES = frozenset({1, 2, 3, 18, 19, 27})
@@ -56,19 +57,12 @@ def _check(text: bytes) -> bool:
     return nmea_checksum(text[:star]) == want
 
 
-def looks_like_nmea(path: str | Path) -> bool:
-    """True if the first non-blank line of ``path`` is an NMEA sentence (maybe time-prefixed)."""
-    p = Path(path)
-    if not p.is_file():
-        raise InputError(f"{p}: file not found")
-    with p.open("rb") as fh:
-        for raw in fh:
-            line = raw.strip()
-            if not line:
-                continue
-            m = _SENTENCE_START.search(line)
-            return m is not None and (b"AIVD" in line or m.start() == 0)
-    return False
+def is_nmea_line(line: bytes) -> bool:
+    """True if ``line`` (stripped) is an NMEA sentence, maybe after a short time prefix."""
+    m = _SENTENCE_START.search(line)
+    if m is None or m.start() > 40:
+        return False
+    return m.start() == 0 or b"VDM" in line or b"VDO" in line
 
 
 @dataclass
@@ -100,12 +94,17 @@ def _time_of(prefix: bytes, tag: bytes | None) -> tuple[float, bool]:
     return t, ok
 
 
-def parse_nmea_lines(lines: list[bytes], source: str = "<nmea>") -> AisReports:
-    """Parse NMEA lines (bytes, without line ends) into validated reports (see module doc)."""
+#: one row: (line, mmsi, time, lat, lon, sog, cog, heading, reject reason)
+NmeaRow = tuple[int, int, float, float, float, float, float, float, str]
+
+
+def nmea_rows(items: list[tuple[int, bytes]]) -> tuple[list[NmeaRow], dict[str, int]]:
+    """Rows of NMEA lines ``(line number, stripped bytes)`` in line order (see the module
+    docstring) and the counts of the lines that hold no report, by kind."""
     from pyais.exceptions import AISBaseException
     from pyais.messages import AISSentence, NMEASentenceFactory
 
-    rows: list[tuple[int, float, float, float, float, float, float, float, str]] = []
+    rows: list[NmeaRow] = []
     skipped: dict[str, int] = {}
     pending: dict[tuple, _Pending] = {}
 
@@ -135,14 +134,10 @@ def parse_nmea_lines(lines: list[bytes], source: str = "<nmea>") -> AisReports:
             sog = float("nan") if sog >= 63 else sog
         rows.append((line, int(msg.mmsi), t, lat, lon, sog, cog, hdg, ""))
 
-    for i, raw in enumerate(lines, start=1):
-        line = raw.strip()
-        if not line:
-            skip("blank line")
-            continue
+    for i, line in items:
         start = _SENTENCE_START.search(line)
         if start is None:
-            skip("not an NMEA sentence")
+            reject(i, float("nan"), "not an AIS line")
             continue
         prefix, rest = line[: start.start()], line[start.start() :]
         tag = None
@@ -152,11 +147,14 @@ def parse_nmea_lines(lines: list[bytes], source: str = "<nmea>") -> AisReports:
             rest = rest[m.end() :]
         t, tag_ok = _time_of(prefix, tag)
         if not rest.startswith((b"!", b"$")):
-            skip("not an NMEA sentence")
+            reject(i, t, "not an AIS line")
             continue
         fields = rest.split(b",")
-        if not rest.startswith(b"!") or len(fields) < 7 or fields[0][3:6] not in (b"VDM", b"VDO"):
+        if not rest.startswith(b"!") or fields[0][3:6] not in (b"VDM", b"VDO"):
             skip("not an AIS sentence")
+            continue
+        if len(fields) < 7 or b"*" not in fields[-1]:
+            reject(i, t, "truncated sentence")
             continue
         if not tag_ok or not _check(rest[1:]):
             reject(i, t, "bad checksum")
@@ -198,33 +196,4 @@ def parse_nmea_lines(lines: list[bytes], source: str = "<nmea>") -> AisReports:
             reject(ln, pend.time, "incomplete multi-sentence message")
 
     rows.sort(key=lambda r: r[0])
-    n = len(rows)
-    cols = list(zip(*rows, strict=True)) if n else [()] * 9
-    rep = AisReports(
-        sources=(source,),
-        source=np.zeros(n, dtype=np.int64),
-        line=np.array(cols[0], dtype=np.int64),
-        mmsi=np.array(cols[1], dtype=np.int64),
-        t=np.array(cols[2], dtype=float),
-        lat=np.array(cols[3], dtype=float),
-        lon=np.array(cols[4], dtype=float),
-        sog_kn=np.array(cols[5], dtype=float),
-        cog_deg=np.array(cols[6], dtype=float),
-        heading_deg=np.array(cols[7], dtype=float),
-        reject=np.array(cols[8], dtype=str) if n else np.zeros(0, dtype=str),
-        skipped=skipped,
-    )
-    # rows rejected above keep their reason; validate the rest (ranges, n/a codes, duplicates)
-    return validate_reports(rep)
-
-
-def read_nmea(path: str | Path) -> AisReports:
-    """Read a timestamped NMEA AIS log (see the module docstring for the accepted forms)."""
-    p = Path(path)
-    if not p.is_file():
-        raise InputError(f"{p}: file not found")
-    data = p.read_bytes()
-    lines = data.splitlines()
-    if not any(ln.strip() for ln in lines):
-        raise InputError(f"{p}: file is empty (expected NMEA sentences)")
-    return parse_nmea_lines(lines, str(p))
+    return rows, skipped

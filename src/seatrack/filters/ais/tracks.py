@@ -1,0 +1,174 @@
+"""Public entry of the AIS tracker for report tables: :func:`track_reports` (local planes,
+true-North courses, WGS84 output) and its result :class:`AisTracks`."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from seatrack.filters.ais.config import AisTrackerConfig
+from seatrack.filters.ais.tracker import TrackStates, VesselInputs, track_vessel_groups
+from seatrack.geometry import (
+    KNOT_MPS,
+    LocalFrame,
+    bearing,
+    local_frames,
+    local_to_geodetic,
+    north_convergence,
+    wrap_2pi,
+)
+
+FloatArray = NDArray[np.float64]
+
+__all__ = [
+    "AisTracks",
+    "PreparedReports",
+    "prepare_reports",
+    "track_reports",
+    "tracks_from_states",
+]
+
+
+@dataclass(frozen=True)
+class AisTracks:
+    """Tracker output, one entry per row of the :class:`~seatrack.io.ais.AisReports`.
+
+    SI units and radians (degrees/knots only when written out). Rows without an estimate
+    (rejected rows, or withheld rows before a track starts) hold NaN.
+
+    Attributes
+    ----------
+    x_m, y_m : local East, North (m) in the vessel's plane (origin ``lat0``, ``lon0``).
+    lat, lon : smoothed WGS84 position (deg).
+    course : course over ground (rad, clockwise from true North at the vessel, [0, 2pi)).
+    speed : speed over ground (m/s).
+    turn_rate : rad/s, clockwise (starboard) positive.
+    std_x_m, std_y_m : 1-sigma East / North (m); ``std_pos_m`` = sqrt((var_x + var_y)/2).
+    std_course, std_speed, std_turn_rate : 1-sigma (rad, m/s, rad/s).
+    outlier : bool; outlier_kind : int (see :data:`OUTLIER_KINDS`); segment : int;
+    nis : float.
+    time_offset_s : estimated timestamp error of the report (s, whole seconds, logged minus
+    true time; :func:`timestamp_offsets`), NaN for rows without an estimate.
+    """
+
+    x_m: FloatArray
+    y_m: FloatArray
+    lat: FloatArray
+    lon: FloatArray
+    lat0: FloatArray
+    lon0: FloatArray
+    course: FloatArray
+    speed: FloatArray
+    turn_rate: FloatArray
+    std_x_m: FloatArray
+    std_y_m: FloatArray
+    std_pos_m: FloatArray
+    std_course: FloatArray
+    std_speed: FloatArray
+    std_turn_rate: FloatArray
+    outlier: NDArray[np.bool_]
+    outlier_kind: NDArray[np.int8]
+    segment: NDArray[np.int64]
+    nis: FloatArray
+    time_offset_s: FloatArray
+
+
+def track_reports(
+    reports: Any,
+    config: AisTrackerConfig | None = None,
+    use: ArrayLike | None = None,
+) -> AisTracks:
+    """Track every vessel of :class:`~seatrack.io.ais.AisReports` (rejected rows skipped).
+
+    Positions go to one local plane per vessel (:func:`seatrack.geometry.local_frames`);
+    the compiled tracker runs over all vessels at once (:func:`track_vessels`); positions
+    come back to WGS84 (:func:`seatrack.geometry.local_to_geodetic`) and the course is
+    referred to true North at the vessel (the plane's North differs by the meridian convergence).
+
+    Parameters
+    ----------
+    reports : AisReports
+        Or any object with ``valid`` (bool), ``mmsi``, ``t`` (s), ``lat``, ``lon`` (deg),
+        ``sog_kn`` and ``cog_deg`` arrays of one length.
+    config : AisTrackerConfig
+    use : array of bool (N,), optional
+        False withholds a row from the filter (it still gets the track estimate at its
+        time) -- for hold-out tests.
+    """
+    prep = prepare_reports(reports, use)
+    st = track_vessel_groups([prep.inputs], config or AisTrackerConfig())[0]
+    return tracks_from_states(prep, st)
+
+
+@dataclass(frozen=True)
+class PreparedReports:
+    """Tracker inputs of a report table: the usable rows ``idx``, their local frames and
+    :class:`~seatrack.filters.ais.tracker.VesselInputs` (SOG/COG in the planes)."""
+
+    n: int
+    idx: NDArray[np.int64]
+    frame: LocalFrame
+    inputs: VesselInputs
+
+
+def prepare_reports(reports: Any, use: ArrayLike | None = None) -> PreparedReports:
+    """Local planes per vessel and the tracker inputs of the usable rows of ``reports``."""
+    ok = reports.valid
+    frame = local_frames(reports.mmsi, reports.lat, reports.lon, ok)
+    idx = np.flatnonzero(ok)
+    sog = reports.sog_kn[idx] * KNOT_MPS
+    cog = np.radians(reports.cog_deg[idx])
+    u = None if use is None else np.asarray(use, dtype=bool)[idx]
+    # COG is referred to true North at the vessel; the plane's North differs by the
+    # meridian convergence, so rotate it into the plane (also for the initial velocity)
+    gam0 = north_convergence(reports.lat[idx], reports.lon[idx], frame.lat0[idx], frame.lon0[idx])
+    cog_plane = cog + gam0
+    v0 = np.stack([sog * np.sin(cog_plane), sog * np.cos(cog_plane)], axis=-1)
+    inputs = VesselInputs(
+        reports.mmsi[idx], reports.t[idx], frame.enu[idx, :2], u, v0, sog, cog_plane
+    )
+    return PreparedReports(len(reports), idx, frame, inputs)
+
+
+def tracks_from_states(prep: PreparedReports, st: TrackStates) -> AisTracks:
+    """:class:`AisTracks` of all rows from the states of the usable ones: WGS84 positions
+    and courses referred to true North at the vessel."""
+    n, idx, frame = prep.n, prep.idx, prep.frame
+
+    def full(a: NDArray, fill: Any = np.nan, dtype: Any = float) -> NDArray:
+        out = np.full((n,) + a.shape[1:], fill, dtype=dtype)
+        out[idx] = a
+        return out
+
+    state = full(st.state)
+    std = full(st.std)
+    lat, lon = local_to_geodetic(state[:, 0], state[:, 1], frame.lat0, frame.lon0)
+    gam = north_convergence(lat, lon, frame.lat0, frame.lon0)
+    course_plane = bearing(state[:, 2], state[:, 3])
+    course = np.where(np.isfinite(state[:, 2]), wrap_2pi(course_plane - gam), np.nan)
+    speed = np.hypot(state[:, 2], state[:, 3])
+    return AisTracks(
+        x_m=state[:, 0],
+        y_m=state[:, 1],
+        lat=lat,
+        lon=lon,
+        lat0=frame.lat0,
+        lon0=frame.lon0,
+        course=course,
+        speed=speed,
+        turn_rate=state[:, 4],
+        std_x_m=std[:, 0],
+        std_y_m=std[:, 1],
+        std_pos_m=np.sqrt(0.5 * (std[:, 0] ** 2 + std[:, 1] ** 2)),
+        std_course=std[:, 3],
+        std_speed=std[:, 2],
+        std_turn_rate=std[:, 4],
+        outlier=full(st.outlier, False, bool),
+        outlier_kind=full(st.outlier_kind, 0, np.int8),
+        segment=full(st.segment, -1, np.int64),
+        nis=full(st.nis),
+        time_offset_s=full(st.time_offset),
+    )

@@ -1,0 +1,444 @@
+"""Track AIS files of any size within a memory budget: read, group vessels, track, write.
+
+1. **Read** every file in blocks (:func:`~seatrack.io.ais.read.file_blocks`), in file then
+   line order; the blocks are kept in memory, or spilled to a temporary folder once they pass
+   a share of the budget. Each vessel's first appearance and row count are noted.
+2. **Group** the vessels in order of first appearance into groups of at most
+   ``group_rows`` rows (a vessel is never split; rows without a readable MMSI form the last
+   group), and split every block by group (one pass).
+3. **Track** group by group (duplicates marked within the group, which holds all rows of its
+   vessels); the refinement pass runs step by step over all groups
+   (:func:`seatrack.filters.ais.refine.drive`), the groups' states spilled between steps,
+   so that the offset prior is that of all reports and the result does not depend on the
+   grouping. The compiled tracker runs the vessels of a group on all cores.
+4. **Write** each group's rows in output order (vessels by first appearance, input order
+   within a vessel) to one TRACKS file (CSV or Parquet) through :mod:`seatrack.io.atomic`.
+
+The peak memory is about the baseline of the process plus ``group_rows`` times the tracker's
+bytes per row (:data:`TRACK_BYTES_PER_ROW`) plus the kept blocks; :func:`group_rows_for`
+sizes groups from a memory limit.
+"""
+
+from __future__ import annotations
+
+import pickle
+import resource
+import tempfile
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seatrack.filters.ais import AisTrackerConfig
+from seatrack.filters.ais.offsets import OffsetScores, prior_counts
+from seatrack.filters.ais.refine import InMemory, Refinement, drive
+from seatrack.filters.ais.tracker import (
+    first_track,
+    prepare_rows,
+    track_states,
+    track_vessel_groups,
+)
+from seatrack.filters.ais.tracks import (
+    AisTracks,
+    PreparedReports,
+    prepare_reports,
+    tracks_from_states,
+)
+from seatrack.io.ais.output import TracksWriter, track_columns
+from seatrack.io.ais.read import file_blocks
+from seatrack.io.ais.reports import (
+    REASON_LABELS,
+    AisReports,
+    concat_reports,
+    mark_duplicates,
+    rejection_counts,
+)
+
+__all__ = [
+    "DEFAULT_MEMORY_LIMIT",
+    "TRACK_BYTES_PER_ROW",
+    "RunSummary",
+    "group_rows_for",
+    "track_files",
+]
+
+#: default ``--memory-limit`` (bytes of peak resident memory)
+DEFAULT_MEMORY_LIMIT = 2 << 30
+#: peak bytes per row of tracking a group and writing its TRACKS (measured: 1.11 GB above
+#: the baseline for one group of 1 million reports, 26-column DMA file)
+TRACK_BYTES_PER_ROW = 1150
+#: bytes per row of a kept block (canonical columns)
+BLOCK_BYTES_PER_ROW = 73
+
+
+def rss_bytes() -> int:
+    """Current resident memory of this process (bytes; Linux ``/proc``, else peak)."""
+    try:
+        with open("/proc/self/statm") as fh:
+            return int(fh.read().split()[1]) * resource.getpagesize()
+    except OSError:
+        return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def group_rows_for(memory_limit: int) -> int:
+    """Rows per vessel group for a peak-memory budget: what is left above the current
+    resident memory (which holds the blocks read), with a 10 % margin; at least 50,000."""
+    free = 0.9 * memory_limit - rss_bytes()
+    return max(50_000, int(free / TRACK_BYTES_PER_ROW))
+
+
+@dataclass
+class RunSummary:
+    """Counts of one run (see :meth:`lines`)."""
+
+    rows: int = 0
+    used: int = 0
+    outliers: int = 0
+    codes: NDArray[np.int64] = field(default_factory=lambda: np.zeros(len(REASON_LABELS), np.int64))
+    skipped: dict[str, int] = field(default_factory=dict)
+    vessels: int = 0
+    segments: int = 0
+    offsets: int = 0
+    groups: int = 0
+
+    def add(self, r: AisReports, tr: AisTracks) -> None:
+        """Count a tracked group."""
+        valid = r.valid
+        n_out = int(np.count_nonzero(tr.outlier))
+        self.rows += len(r)
+        self.used += int(np.count_nonzero(valid)) - n_out
+        self.outliers += n_out
+        self.codes += np.bincount(r.code, minlength=len(REASON_LABELS))
+        self.vessels += int(np.unique(r.mmsi[valid]).size)
+        has = tr.segment >= 0
+        if has.any():  # segments are numbered 1..K within each vessel
+            _, inv = np.unique(r.mmsi[has], return_inverse=True)
+            top = np.zeros(int(inv.max()) + 1, dtype=np.int64)
+            np.maximum.at(top, inv, tr.segment[has])
+            self.segments += int(top.sum())
+        off = np.asarray(tr.time_offset_s, float)
+        self.offsets += int(np.count_nonzero(np.isfinite(off) & (off != 0)))
+        self.groups += 1
+
+    def lines(self) -> list[str]:
+        """Rows read / used / rejected by reason, outliers, vessels, segments, offsets."""
+        rejected = self.rows - int(self.codes[0])
+        out = [
+            f"rows read: {self.rows}",
+            f"rows used: {self.used}",
+            f"outliers (flagged, not used): {self.outliers}",
+            f"rows rejected: {rejected}",
+        ]
+        out += [f"  {reason}: {k}" for reason, k in rejection_counts(self.codes).items()]
+        if self.skipped:
+            out.append(f"lines that are not position reports: {sum(self.skipped.values())}")
+            out += [f"  {k}: {v}" for k, v in sorted(self.skipped.items())]
+        out.append(f"vessels: {self.vessels}, track segments: {self.segments}")
+        if self.used:
+            share = 100 * self.offsets / self.used
+            out.append(
+                f"reports with a whole-second timestamp offset: {self.offsets} ({share:.1f} %)"
+            )
+        return out
+
+
+class _Store:
+    """Blocks of rows kept in memory or, past ``budget`` bytes, in .npz files."""
+
+    def __init__(self, budget: int, folder: Path) -> None:
+        self.budget, self.folder = budget, folder
+        self.items: list[AisReports | Path] = []
+        self.bytes = 0
+
+    def add(self, r: AisReports) -> None:
+        size = len(r) * BLOCK_BYTES_PER_ROW
+        if self.bytes + size <= self.budget:
+            self.items.append(r)
+            self.bytes += size
+            return
+        path = self.folder / f"block{len(self.items)}.pkl"
+        with path.open("wb") as fh:
+            pickle.dump(r, fh, protocol=5)
+        self.items.append(path)
+
+    def blocks(self) -> Any:
+        """The blocks in order, each released by the store once yielded."""
+        self.items.reverse()
+        while self.items:
+            it = self.items.pop()
+            if isinstance(it, Path):
+                yield _undump(it)
+                it.unlink()
+            else:
+                yield it
+        self.bytes = 0
+
+
+@dataclass
+class _Registry:
+    """First appearance (rank) and row count of every vessel, in reading order."""
+
+    rank: dict[int, int] = field(default_factory=dict)
+    count: dict[int, int] = field(default_factory=dict)
+    no_mmsi: int = 0
+
+    def add(self, mmsi: NDArray[np.int64]) -> None:
+        known = mmsi >= 0
+        self.no_mmsi += int(np.count_nonzero(~known))
+        u, first, cnt = np.unique(mmsi[known], return_index=True, return_counts=True)
+        for m in u[np.argsort(first, kind="stable")].tolist():
+            if m not in self.rank:
+                self.rank[m] = len(self.rank)
+        for m, c in zip(u.tolist(), cnt.tolist(), strict=True):
+            self.count[m] = self.count.get(m, 0) + c
+
+    def groups(self, group_rows: int) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+        """Sorted vessel ids and the group of each (by first appearance, groups of at most
+        ``group_rows`` rows unless one vessel has more)."""
+        ids = np.array(sorted(self.rank, key=self.rank.__getitem__), dtype=np.int64)
+        cnt = np.array([self.count[m] for m in ids.tolist()], dtype=np.int64)
+        gid = np.zeros(ids.size, dtype=np.int64)
+        g, acc = 0, 0
+        for k, c in enumerate(cnt.tolist()):
+            if acc and acc + c > group_rows:
+                g, acc = g + 1, 0
+            gid[k] = g
+            acc += c
+        order = np.argsort(ids)
+        return ids[order], gid[order]
+
+
+def _read_all(
+    paths: Sequence[str | Path], store: _Store, block_bytes: int
+) -> tuple[_Registry, dict[str, int], tuple[str, ...]]:
+    reg = _Registry()
+    skipped: dict[str, int] = {}
+    for s, p in enumerate(paths):
+        blocks: list[AisReports] = []
+        for attempt in file_blocks(p, block_bytes):
+            blocks = attempt
+        for b in blocks:
+            b.source[:] = s
+            for k, v in b.skipped.items():
+                skipped[k] = skipped.get(k, 0) + v
+            b.skipped = {}
+            reg.add(b.mmsi)
+            store.add(b)
+    return reg, skipped, tuple(str(p) for p in paths)
+
+
+def _split(
+    store: _Store, ids: NDArray[np.int64], gid: NDArray[np.int64], n_groups: int, folder: Path
+) -> list[list[AisReports | Path]]:
+    """Every block split by vessel group (rows without an MMSI: group ``n_groups``)."""
+    pieces: list[list[AisReports | Path]] = [[] for _ in range(n_groups + 1)]
+    spill = any(isinstance(it, Path) for it in store.items)
+    for k, b in enumerate(store.blocks()):
+        g = np.full(len(b), n_groups, dtype=np.int64)
+        known = b.mmsi >= 0
+        g[known] = gid[np.searchsorted(ids, b.mmsi[known])]
+        order = np.argsort(g, kind="stable")
+        bounds = np.searchsorted(g[order], np.arange(n_groups + 2))
+        for j in range(n_groups + 1):
+            if bounds[j + 1] > bounds[j]:
+                piece = b.take(order[bounds[j] : bounds[j + 1]])
+                if spill:
+                    path = folder / f"g{j}_b{k}.pkl"
+                    with path.open("wb") as fh:
+                        pickle.dump(piece, fh, protocol=5)
+                    pieces[j].append(path)
+                else:
+                    pieces[j].append(piece)
+    return pieces
+
+
+def _load(items: list[AisReports | Path], sources: tuple[str, ...]) -> AisReports:
+    """The pieces of one group as one table (the list is emptied)."""
+    parts = []
+    items.reverse()
+    while items:
+        it = items.pop()
+        if isinstance(it, Path):
+            parts.append(_undump(it))
+            it.unlink()
+        else:
+            parts.append(it)
+    if not parts:
+        return AisReports.empty(sources)
+    r = concat_reports(parts)
+    r.sources = sources
+    r.source = np.concatenate([p.source for p in parts])
+    return r
+
+
+@dataclass
+class GroupState:
+    """One vessel group between the tracking steps: its reports and tracker inputs, and
+    either its refinement (``ref``) or, without one, its first track (``rows``, ``out``)."""
+
+    reports: AisReports
+    prep: PreparedReports
+    order: NDArray[np.int64]
+    ref: Refinement | None = None
+    rows: Any = None
+    out: Any = None
+
+
+def start_group(r: AisReports, cfg: AisTrackerConfig) -> GroupState:
+    """Duplicates marked, tracker inputs, the first track and the refinement's start."""
+    r = mark_duplicates(r)
+    prep = prepare_reports(r)
+    rows, order = prepare_rows(prep.inputs, cfg)
+    out = first_track(rows, cfg)
+    if cfg.refine and rows.t.size:
+        return GroupState(r, prep, order, Refinement(rows, out, cfg))
+    return GroupState(r, prep, order, None, rows, out)
+
+
+def finish_group(grp: GroupState) -> AisTracks:
+    """The group's tracks (after the refinement steps)."""
+    if grp.ref is not None:
+        out, toff = grp.ref.finish()
+        rows = grp.ref.rows
+    else:
+        rows, out = grp.rows, grp.out
+        toff = np.zeros(rows.t.size)
+    return tracks_from_states(grp.prep, track_states(rows, out, toff, grp.order))
+
+
+def _ident_scores(ref: Refinement) -> OffsetScores:
+    sc = ref.scores()
+    keep = np.flatnonzero(sc.ident)
+    return OffsetScores(keep, sc.q[keep], np.ones(keep.size, bool), 0)
+
+
+def _dump(obj: Any, path: Path) -> None:
+    with path.open("wb") as fh:
+        pickle.dump(obj, fh, protocol=5)
+
+
+def _undump(path: Path) -> Any:
+    with path.open("rb") as fh:
+        return pickle.load(fh)
+
+
+class _Spilled:
+    """:class:`~seatrack.filters.ais.refine.GroupRunner` of refinements pickled in a
+    folder; the identifiable scores of each group stay in memory for the prior counts."""
+
+    def __init__(self, paths: list[Path], scores: list[OffsetScores]) -> None:
+        self.paths, self.q = paths, scores
+
+    def each(self, f: Callable[[Refinement], Any]) -> list[Any]:
+        out = []
+        for k, p in enumerate(self.paths):
+            ref: Refinement = _undump(p)
+            out.append(f(ref))
+            self.q[k] = _ident_scores(ref)
+            _dump(ref, p)
+            del ref
+        return out
+
+    def counts(self, prior: NDArray[np.float64]) -> NDArray[np.int64]:
+        total = np.zeros(prior.size, dtype=np.int64)
+        for sc in self.q:
+            total += prior_counts(sc, prior)
+        return total
+
+    def n_ident(self) -> int:
+        return sum(sc.rows.size for sc in self.q)
+
+
+def _track_groups(
+    groups: list[list[AisReports | Path]],
+    sources: tuple[str, ...],
+    cfg: AisTrackerConfig,
+    folder: Path,
+    emit: Callable[[AisReports, AisTracks], None],
+) -> None:
+    """Track the vessel groups (see the module docstring) and pass each to ``emit``."""
+    if len(groups) == 1:  # one group: in memory
+        grp = start_group(_load(groups[0], sources), cfg)
+        if grp.ref is not None:
+            drive(InMemory([grp.ref]), cfg)
+        reports, tracks = grp.reports, finish_group(grp)
+        del grp  # the tracker's state is freed before the output is formatted
+        emit(reports, tracks)
+        return
+    ctx, refs, scores = [], [], []
+    for j, items in enumerate(groups):
+        grp = start_group(_load(items, sources), cfg)
+        if grp.ref is not None:
+            path = folder / f"ref{j}.pkl"
+            _dump(grp.ref, path)
+            refs.append(path)
+            scores.append(_ident_scores(grp.ref))
+            grp.ref = None
+        ctx.append(folder / f"group{j}.pkl")
+        _dump((grp, refs[-1] if refs and refs[-1].name == f"ref{j}.pkl" else None), ctx[-1])
+        del grp
+    if refs:
+        drive(_Spilled(refs, scores), cfg)
+    for path in ctx:
+        grp, ref_path = _undump(path)
+        path.unlink()
+        if ref_path is not None:
+            grp.ref = _undump(ref_path)
+            ref_path.unlink()
+        reports, tracks = grp.reports, finish_group(grp)
+        del grp
+        emit(reports, tracks)
+
+
+def track_files(
+    paths: Sequence[str | Path],
+    out: str | Path,
+    config: AisTrackerConfig | None = None,
+    memory_limit: int = DEFAULT_MEMORY_LIMIT,
+    group_rows: int | None = None,
+    block_bytes: int = 32 << 20,
+    on_group: Callable[[AisReports, AisTracks], None] | None = None,
+) -> RunSummary:
+    """Read, track and write AIS files within a memory budget (see the module docstring).
+
+    Parameters
+    ----------
+    paths : input files (CSV, compressed CSV, Parquet, NMEA); a vessel seen in several
+        files is one track.
+    out : TRACKS file (``.csv`` or ``.parquet``); written atomically.
+    config : tracker configuration.
+    memory_limit : bytes; sizes the vessel groups (:func:`group_rows_for`) and the blocks
+        kept in memory.
+    group_rows : rows per vessel group (overrides the size from ``memory_limit``).
+    on_group : called with each group's reports and tracks after it is written (e.g. to
+        collect the tracks for a map).
+    """
+    cfg = config or AisTrackerConfig()
+    summary = RunSummary()
+    with tempfile.TemporaryDirectory(prefix="seatrack-ais-") as tmp, TracksWriter(out) as writer:
+        folder = Path(tmp)
+        store = _Store(max(memory_limit // 4, 1 << 26), folder)
+        reg, skipped, sources = _read_all(paths, store, block_bytes)
+        summary.skipped = skipped
+        ids, gid = reg.groups(group_rows or group_rows_for(memory_limit))
+        n_groups = int(gid.max()) + 1 if gid.size else 0
+        pieces = _split(store, ids, gid, n_groups, folder)
+        vessel_groups = pieces[:n_groups]
+        no_mmsi = pieces[n_groups]
+
+        def emit(r: AisReports, tr: AisTracks) -> None:
+            writer.write(r, track_columns(tr))
+            summary.add(r, tr)
+            if on_group is not None:
+                on_group(r, tr)
+
+        if vessel_groups:
+            _track_groups(vessel_groups, sources, cfg, folder, emit)
+        if no_mmsi:
+            r = _load(no_mmsi, sources)
+            prep = prepare_reports(r)
+            emit(r, tracks_from_states(prep, track_vessel_groups([prep.inputs], cfg)[0]))
+    return summary

@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from seatrack import kalman
 from seatrack.config import param
-from seatrack.geometry import spherical_to_cart
+from seatrack.geometry import spherical_to_cart, wrap_pi
 from seatrack.models.measurement import (
     RangeBearing,
     RangeBearingElevation,
@@ -65,6 +65,9 @@ __all__ = [
     "two_point_gaussian",
     "common_columns",
     "finish_update",
+    "predicted",
+    "step_times",
+    "wrap_angles",
     "run_tracks",
     "COMMON_COLUMNS",
 ]
@@ -141,6 +144,11 @@ class Plots:
         return self.elevation is not None
 
     @property
+    def label(self) -> str:
+        """The track label of single-track plots ("" when unlabelled)."""
+        return "" if self.track is None or len(self.track) == 0 else str(self.track[0])
+
+    @property
     def has_range_rate(self) -> bool:
         return self.range_rate is not None
 
@@ -170,6 +178,14 @@ class Plots:
             self.line[ix],
             sub(self.track),
         )
+
+    def horizontal(self) -> Plots:
+        """2-D plots of these plots: horizontal range ``r cos(elevation)``, no elevation
+        (for the methods that track in the horizontal plane only)."""
+        if self.elevation is None:
+            return self
+        rng = self.range * np.cos(self.elevation)
+        return dataclasses.replace(self, range=rng, elevation=None)
 
     def polar(self, range_rate: bool = True) -> FloatArray:
         """Measurement vectors ``(N, m)``: range, azimuth, [elevation], [range rate]."""
@@ -511,6 +527,38 @@ def common_columns(x: FloatArray, P: FloatArray, d: int) -> dict[str, FloatArray
     }
 
 
+def wrap_angles(y: FloatArray, angular: FloatArray) -> FloatArray:
+    """Wrap the components of innovations ``y (..., m)`` flagged in ``angular (m,)`` to
+    ``(-pi, pi]``."""
+    return np.where(np.asarray(angular) > 0, wrap_pi(y), y)
+
+
+def step_times(state: TrackState, t: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Target times ``(B,)`` of a prediction and the intervals ``dt = t - state.t`` (s).
+
+    Raises ``ValueError`` when a track would go back in time.
+    """
+    tt = np.broadcast_to(np.asarray(t, dtype=float), state.t.shape).copy()
+    dt = tt - state.t
+    if np.any(dt < 0):
+        raise ValueError("predict: a track would go back in time")
+    return tt, dt
+
+
+def predicted(
+    state: TrackState,
+    t: FloatArray,
+    x: FloatArray,
+    P: FloatArray,
+    aux: Mapping[str, Any] | None = None,
+) -> TrackState:
+    """A predicted batch: new ``t``, ``x``, ``P`` (and ``aux`` entries), status PREDICTED,
+    no NIS / likelihood."""
+    nan = np.full(len(state), np.nan)
+    status = np.full(len(state), PlotStatus.PREDICTED, np.int8)
+    return TrackState(t, x, P, nan, nan.copy(), status, {**state.aux, **(aux or {})})
+
+
 def finish_update(
     prior: TrackState,
     x: FloatArray,
@@ -603,7 +651,8 @@ def run_tracks(
             if arr is None:
                 arr = out[name] = np.empty(N, dtype=np.asarray(v).dtype)
             arr[rows] = v
-    out["status"] = np.array([PlotStatus(int(s)).label for s in out["status"]])
+    labels = np.array([s.label for s in PlotStatus])
+    out["status"] = labels[out["status"]]
     return out
 
 

@@ -59,27 +59,27 @@ __all__ = [
 METHODS: dict[str, tuple[str, str, str]] = {
     "ekf": ("seatrack.filters.ekf", "EKF", "constant-velocity EKF on polar plots"),
     "robust": (
-        "seatrack.filters.robust",
+        "seatrack.filters.robust_track",
         "Robust",
         "Ramazanov robust beam-frame filter (algorithm R), 2-D range/bearing",
     ),
     "robust-adaptive": (
-        "seatrack.filters.robust",
+        "seatrack.filters.robust_track",
         "RobustAdaptive",
         "Ramazanov adaptive-robust beam-frame filter (algorithm A), 2-D range/bearing",
     ),
     "huber": (
-        "seatrack.filters.robust_baselines",
+        "seatrack.filters.robust_track",
         "Huber",
         "Huber M-estimation EKF (IRLS), 2-D range/bearing",
     ),
     "student-t": (
-        "seatrack.filters.robust_baselines",
+        "seatrack.filters.robust_track",
         "StudentT",
         "variational-Bayes Student-t EKF, 2-D range/bearing",
     ),
     "ekf-rb": (
-        "seatrack.filters.robust_baselines",
+        "seatrack.filters.robust_track",
         "RangeBearingEKF",
         "2-D range/bearing CV EKF with outlier diagnostics (baseline of robust)",
     ),

@@ -106,7 +106,7 @@ METHODS: dict[str, tuple[str, str, str]] = {
 }
 
 #: the sensor keys every method accepts (flat or in a ``[sensor]`` table)
-SENSOR_KEYS = tuple(config_keys(SensorNoise))
+SENSOR_KEYS = tuple(k for k, name in config_keys(SensorNoise).items() if k != name)
 
 
 def method_class(name: str) -> Any:

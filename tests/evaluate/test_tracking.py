@@ -91,10 +91,10 @@ def test_every_method_accepts_the_sensor_keys_and_failures_are_reported(monkeypa
     for m in methods:
         assert all(not r.error for r in out[m]), (m, [r.error for r in out[m]])
 
-    def broken(plots, config):
+    def broken(name, plots, config, source="config"):
         raise RuntimeError("boom")
 
-    monkeypatch.setattr(registry, "get_method", lambda name: broken)
+    monkeypatch.setattr(registry, "run", broken)
     out = run_methods(data, ["broken"], {"broken": {}})
     assert all(r.error == "RuntimeError: boom" for r in out["broken"])
 

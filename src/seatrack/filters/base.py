@@ -630,6 +630,7 @@ def run_tracks(
     bounds = np.searchsorted(rank[by_rank], np.arange(int(rank.max()) + 2))
     out: dict[str, NDArray[Any]] = {}
     state: TrackState | None = None
+    ids = np.arange(T)
     for k in range(bounds.size - 1):
         rows = by_rank[bounds[k] : bounds[k + 1]]
         tracks = ti[rows]
@@ -641,8 +642,11 @@ def run_tracks(
             state = full
         else:
             assert state is not None
-            s = flt.update(flt.predict(state.take(tracks), pk.t), pk)
-            state = state.put(tracks, s)
+            if tracks.size == T and np.array_equal(tracks, ids):  # every track, in order
+                s = state = flt.update(flt.predict(state, pk.t), pk)
+            else:
+                s = flt.update(flt.predict(state.take(tracks), pk.t), pk)
+                state = state.put(tracks, s)
         cols = flt.columns(s)
         cols["status"] = s.status
         cols["nis"] = s.nis

@@ -358,6 +358,8 @@ class IMM:
                 if len(self._cache) < 64:
                     self._cache[key] = FQ
             return kalman.predict(x, P, FQ[0], FQ[1])
+        if hasattr(model, "predict"):  # compiled nonlinear prediction (e.g. CoordinatedTurn)
+            return model.predict(x, P, dt)  # type: ignore[no-any-return]
         fx, F = model.transition(x, dt)
         return kalman.extended_predict(fx, P, F, model.noise(dt))
 
@@ -459,17 +461,6 @@ def _common_dt(dt: FloatArray) -> Any:
     """A scalar interval when every track of the batch has the same one (cached, fused
     matrices), else the per-track array."""
     return float(dt[0]) if dt.size and np.all(dt == dt[0]) else dt
-
-
-def _mixture_nis(y: FloatArray, S: FloatArray) -> FloatArray:
-    """``y^T S^-1 y`` per track, NaN where ``S`` is singular or not finite."""
-    out = np.full(y.shape[0], np.nan)
-    ok = np.isfinite(y).all(-1) & np.isfinite(S).all((-1, -2))
-    if ok.any():
-        with np.errstate(all="ignore"):
-            w = np.linalg.solve(S[ok], y[ok][..., None])[..., 0]
-        out[ok] = np.einsum("...i,...i->...", y[ok], w)
-    return out
 
 
 @dataclass(frozen=True)
@@ -616,7 +607,7 @@ class CVCTIMM:
         Rk = R[:, None] if self.imm.fused_H is not None and sensor is None else R
         with np.errstate(all="ignore"):
             res = self.imm.update(self._engine(state), z, Rk, sensor, check=False)
-        nis = _mixture_nis(y, S)
+        nis = kalman.mahalanobis(y, S)
         aux = {"X": res.state.X, "PP": res.state.P, "mu": res.state.mu}
         return finish_update(state, res.x, res.P, nis, res.log_likelihood, state.t, aux, ok)
 
@@ -737,7 +728,7 @@ class FilterIMM:
         ll = np.where(ok[:, None], ll, 0.0)
         mu, xc, Pc, tot = self._combine(states, state.aux["mu"], ll)
         aux: dict[str, Any] = {f"m{j}": s for j, s in enumerate(states)} | {"mu": mu}
-        return finish_update(state, xc, Pc, _mixture_nis(y, S), tot, state.t, aux, ok)
+        return finish_update(state, xc, Pc, kalman.mahalanobis(y, S), tot, state.t, aux, ok)
 
     def columns(self, state: TrackState) -> dict[str, NDArray[Any]]:
         cols = common_columns(state.x, state.P, self.d)

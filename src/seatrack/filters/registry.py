@@ -176,7 +176,7 @@ def build(
         if "unknown key" in str(exc):
             raise ConfigError(f"{exc}; sensor keys: {', '.join(SENSOR_KEYS)}") from None
         raise
-    sensor = parse_config(SensorNoise, sensor_tab, source=f"{source}: sensor")
+    sensor = parse_config(SensorNoise, sensor_tab, source=source)
     if getattr(cls, "needs_range_rate", False) and not range_rate:
         raise ValueError(f"method {name} needs a range_rate_mps column in the plots")
     dd = d if d in cls.dims else max(cls.dims)

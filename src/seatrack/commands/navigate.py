@@ -102,7 +102,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Own-ship position and heading from radar echoes of mapped landmarks (JP H03-66630)."""
         from seatrack.navigation.files import read_echoes, read_gyro, write_nav
-        from seatrack.navigation.landmarks import read_map_csv
+        from seatrack.io.landmarks import read_map_csv
         from seatrack.navigation.navigator import navigate
 
         cfg = _config(antenna_period, range_limit, antenna_offset, method, clutter_density)
@@ -145,7 +145,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Correct a landmark map from recorded passages; flag poorly visible landmarks."""
         from seatrack.navigation.files import read_echoes, read_gyro
-        from seatrack.navigation.landmarks import read_map_csv, write_map_csv
+        from seatrack.io.landmarks import read_map_csv, write_map_csv
         from seatrack.navigation.navigator import navigate
         from seatrack.navigation.survey import SurveyConfig, survey
 

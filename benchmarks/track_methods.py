@@ -78,7 +78,9 @@ def filterpy_track(plots_csv: Path, out: Path) -> None:
 
     def hx(x: np.ndarray) -> np.ndarray:
         r = math.hypot(x[0], x[1])
-        return np.array([r, math.atan2(x[0], x[1]) % (2 * math.pi), (x[0] * x[2] + x[1] * x[3]) / r])
+        return np.array(
+            [r, math.atan2(x[0], x[1]) % (2 * math.pi), (x[0] * x[2] + x[1] * x[3]) / r]
+        )
 
     def jac(x: np.ndarray) -> np.ndarray:
         px, py, vx, vy = x
@@ -157,8 +159,13 @@ def main(argv: list[str] | None = None) -> int:
             fn()  # type: ignore[operator]  # warm-up: imports, compiled kernels
         best = best_times(jobs, repeat)
         anchor = best.pop("FilterPy") / n * 1e6
-        print(f"{n_targets} tracks, {n} plots; end to end (read CSV, run, write CSV), best of {repeat}")
-        print(f"{'method':<17}{'us/plot':>9}{'FilterPy EKF loop':>19}{'speed-up':>10}  target >= 3x")
+        print(
+            f"{n_targets} tracks, {n} plots; end to end (read CSV, run, write CSV), "
+            f"best of {repeat}"
+        )
+        print(
+            f"{'method':<17}{'us/plot':>9}{'FilterPy EKF loop':>19}{'speed-up':>10}  target >= 3x"
+        )
         worst = math.inf
         for name, sec in best.items():
             us = sec / n * 1e6

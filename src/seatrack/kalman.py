@@ -531,9 +531,7 @@ def extended_update(
     return UpdateResult(xo, Po, y, S, nis, ll, K)
 
 
-@guvectorize(
-    ["void(f8[:], f8[:,:], f8[:])"], "(m),(m,m)->()", nopython=True, cache=True
-)
+@guvectorize(["void(f8[:], f8[:,:], f8[:])"], "(m),(m,m)->()", nopython=True, cache=True)
 def _mahalanobis_kernel(y, S, out):  # pragma: no cover - compiled
     m = y.shape[0]
     L = np.empty((m, m))

@@ -175,9 +175,7 @@ def test_unknown_config_key_lists_valid_keys():
 
 
 def test_wrong_type_names_file_and_key():
-    with pytest.raises(
-        ValueError, match=r"cfg.toml: sigma_range_m: expected a number, got 'abc'"
-    ):
+    with pytest.raises(ValueError, match=r"cfg.toml: sigma_range_m: expected a number, got 'abc'"):
         registry.build("turning", {"sigma_range_m": "abc"}, source="cfg.toml")
 
 

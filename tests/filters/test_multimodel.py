@@ -15,7 +15,6 @@ from seatrack.filters.multimodel import (
     MultiModelState,
     range_rate_row,
 )
-from seatrack.geometry import G0
 from seatrack.models import numerical_jacobian
 from seatrack.models.measurement import range_rate
 from seatrack.simulate import Leg, NoiseModel, observe, trajectory

@@ -197,5 +197,3 @@ def test_bad_configs_raise() -> None:
         StudentTConfig(nu=-1.0)
     with pytest.raises(ValueError, match="iterations"):
         StudentTConfig(iterations=0)
-
-

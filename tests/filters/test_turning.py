@@ -342,14 +342,6 @@ def test_covariances_stay_symmetric_positive_definite():
 # ---------------------------------------------------------------------------
 
 
-
-
-
-
-
-
-
-
 def test_kalman_core_used_for_heading_update():
     """The heading update is the core's angular EKF update (same numbers)."""
     s, P = np.array([3.1, 0.01]), np.diag([0.01, 1e-4])

@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from seatrack.filters.base import PlotStatus
 from seatrack.models import numerical_jacobian
 from seatrack.models.motion import cv_noise
-from seatrack.filters.base import PlotStatus
 from seatrack.navigation.filter import (
     KalmanNav,
     ProcessNoise,

@@ -101,8 +101,8 @@ def register(app: typer.Typer) -> None:
         origin: str | None = origin_opt,
     ) -> None:
         """Own-ship position and heading from radar echoes of mapped landmarks (JP H03-66630)."""
-        from seatrack.navigation.files import read_echoes, read_gyro, write_nav
         from seatrack.io.landmarks import read_map_csv
+        from seatrack.navigation.files import read_echoes, read_gyro, write_nav
         from seatrack.navigation.navigator import navigate
 
         cfg = _config(antenna_period, range_limit, antenna_offset, method, clutter_density)
@@ -144,8 +144,8 @@ def register(app: typer.Typer) -> None:
         origin: str | None = origin_opt,
     ) -> None:
         """Correct a landmark map from recorded passages; flag poorly visible landmarks."""
-        from seatrack.navigation.files import read_echoes, read_gyro
         from seatrack.io.landmarks import read_map_csv, write_map_csv
+        from seatrack.navigation.files import read_echoes, read_gyro
         from seatrack.navigation.navigator import navigate
         from seatrack.navigation.survey import SurveyConfig, survey
 

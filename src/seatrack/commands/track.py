@@ -62,7 +62,9 @@ def write_track_csv(
     with atomic_write(path, "wb") as fh:
         fh.write((",".join(table.column_names) + "\n").encode())
         try:
-            pacsv.write_csv(table, fh, pacsv.WriteOptions(include_header=False, quoting_style="none"))
+            pacsv.write_csv(
+                table, fh, pacsv.WriteOptions(include_header=False, quoting_style="none")
+            )
         except pa.ArrowInvalid:  # a value needs quoting: start the body again, quoted
             fh.seek(0)
             fh.truncate()

@@ -712,7 +712,9 @@ class FilterIMM:
     def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
         """Moment-matched mixture of the models' innovations (weights: ``mu``)."""
         mu = state.aux["mu"]
-        parts = [m.innovation(s, plots) for m, s in zip(self.models, self._models(state))]
+        parts = [
+            m.innovation(s, plots) for m, s in zip(self.models, self._models(state), strict=True)
+        ]
         y = sum(mu[:, j, None] * p[0] for j, p in enumerate(parts))
         S = sum(
             mu[:, j, None, None] * (p[1] + (p[0] - y)[:, :, None] * (p[0] - y)[:, None, :])
@@ -722,7 +724,7 @@ class FilterIMM:
 
     def update(self, state: TrackState, plots: Plots) -> TrackState:
         y, S = self.innovation(state, plots)
-        states = [m.update(s, plots) for m, s in zip(self.models, self._models(state))]
+        states = [m.update(s, plots) for m, s in zip(self.models, self._models(state), strict=True)]
         ll = np.stack([s.log_likelihood for s in states], -1)
         ok = np.isfinite(ll).all(-1)
         ll = np.where(ok[:, None], ll, 0.0)

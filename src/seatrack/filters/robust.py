@@ -64,9 +64,8 @@ Units: metres, seconds, radians; x = East, y = North; bearings clockwise from No
 
 from __future__ import annotations
 
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from functools import cached_property
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray

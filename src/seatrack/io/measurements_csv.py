@@ -21,8 +21,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.geometry import bearing_rad_to_deg
 from seatrack.filters.base import Plots
+from seatrack.geometry import bearing_rad_to_deg
 from seatrack.io.table import InputError, read_csv_table
 from seatrack.simulate.sensors import Measurements
 from seatrack.simulate.trajectories import Trajectory
@@ -83,8 +83,9 @@ def plots_from_measurements(meas: Measurements, track_id: str = "1") -> Plots:
     Returns
     -------
     Plots
-        Only detected scans, labelled ``track_id``; ``line`` holds the scan index of each plot (0-based), so
-        outputs can be put back on the full scan grid with ``np.flatnonzero(meas.detected)``.
+        Only detected scans, labelled ``track_id``; ``line`` holds the scan index of each
+        plot (0-based), so outputs can be put back on the full scan grid with
+        ``np.flatnonzero(meas.detected)``.
         Sensor velocity is the simulated one (not a finite difference).
 
     Raises

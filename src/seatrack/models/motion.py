@@ -413,8 +413,6 @@ class CoordinatedTurn:
     def noise(self, dt: ArrayLike) -> FloatArray:
         return ct_noise(dt, self.q, self.q_omega, self.d)
 
-    def predict(
-        self, x: ArrayLike, P: ArrayLike, dt: ArrayLike
-    ) -> tuple[FloatArray, FloatArray]:
+    def predict(self, x: ArrayLike, P: ArrayLike, dt: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """EKF prediction of ``(x, P)`` over ``dt`` in one compiled call (:func:`ct_predict`)."""
         return ct_predict(x, P, dt, self.q, self.q_omega)

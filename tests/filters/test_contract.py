@@ -198,3 +198,19 @@ def test_one_sensor_default_for_every_method(name):
 def test_mm_rangerate_needs_range_rate():
     with pytest.raises(ValueError, match="needs a range_rate_mps column"):
         registry.build("mm-rangerate", {}, range_rate=False)
+
+
+@pytest.mark.parametrize("name", METHODS)
+def test_bad_first_plot_track_starts_on_the_next(name):
+    plots = make_plots(2)
+    bad, row = _with_bad_plot(plots, "T1", 0, 1e308)
+    with np.errstate(all="raise"):
+        cols = registry.run(name, bad, CFG)
+    t1 = np.flatnonzero(plots.track == "T1")
+    assert cols["status"][row] == "rejected"
+    assert cols["status"][t1[1]] == "initiated"
+    assert (cols["status"][t1[2:]] == "updated").all()
+    assert np.isfinite(cols["x_m"][t1[1:]]).all()
+    good = registry.run(name, plots, CFG)
+    other = plots.track != "T1"
+    np.testing.assert_array_equal(cols["x_m"][other], good["x_m"][other])

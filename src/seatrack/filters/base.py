@@ -40,15 +40,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from seatrack import kalman
 from seatrack.config import param
+from seatrack.filters.converted import polar_jacobian
 from seatrack.geometry import spherical_to_cart, wrap_pi
-from seatrack.models.measurement import (
-    RangeBearing,
-    RangeBearingElevation,
-    RangeRate,
-    Stacked,
-    range_bearing_elevation_jacobian,
-    range_bearing_jacobian,
-)
+from seatrack.models.measurement import RangeBearing, RangeBearingElevation, RangeRate, Stacked
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -438,18 +432,15 @@ class RecursiveFilter(Protocol):
 # Initiation: one plot or two plots -> Cartesian Gaussian
 # ---------------------------------------------------------------------------
 def _polar_position_cov(plots: Plots, sensor: SensorNoise) -> tuple[FloatArray, FloatArray]:
-    """Cartesian positions ``(N, d)`` and their linearised covariances ``(N, d, d)``."""
+    """Cartesian positions ``(N, d)`` and their linearised covariances ``(N, d, d)``
+    (``G R G^T`` with ``G`` the Jacobian of the polar-to-Cartesian conversion). An absurd
+    plot gives non-finite values, never a warning: the caller rejects it."""
     d = plots.d
-    p = plots.positions()
-    rel = p - plots.sensor[:, :d]
-    if d == 2:
-        J = range_bearing_jacobian(rel)  # d(range, az)/d(x, y)
-        Rp = np.diag([sensor.sigma_range**2, sensor.sigma_azimuth**2])
-    else:
-        J = range_bearing_elevation_jacobian(rel)
-        Rp = np.diag([sensor.sigma_range**2, sensor.sigma_azimuth**2, sensor.sigma_elevation**2])
-    G = np.linalg.inv(J)  # d(x, y)/d(range, az): J is invertible for range > 0
-    C = G @ Rp @ np.swapaxes(G, -1, -2)
+    sig = [sensor.sigma_range, sensor.sigma_azimuth, sensor.sigma_elevation][:d]
+    with np.errstate(all="ignore"):
+        p = plots.positions()
+        G = polar_jacobian(plots.range, plots.azimuth, plots.elevation)
+        C = (G * np.square(sig)[None, None, :]) @ np.swapaxes(G, -1, -2)
     return p, kalman.symmetrize(C)
 
 
@@ -472,12 +463,13 @@ def plot_gaussian(
     P[:, :d, :d] = C
     Pv = np.broadcast_to(np.eye(d) * speed_sigma**2, (N, d, d)).copy()
     if range_rate and plots.range_rate is not None:
-        u = p - plots.sensor[:, :d]
-        u /= np.linalg.norm(u, axis=-1, keepdims=True)
-        vr = plots.range_rate + np.einsum("ij,ij->i", u, plots.sensor_vel[:, :d])
-        x[:, d:] = u * vr[:, None]
-        uu = u[:, :, None] * u[:, None, :]
-        Pv = Pv - uu * (speed_sigma**2 - sensor.sigma_range_rate**2)
+        with np.errstate(all="ignore"):  # an absurd plot: non-finite start, rejected
+            u = p - plots.sensor[:, :d]
+            u /= np.linalg.norm(u, axis=-1, keepdims=True)
+            vr = plots.range_rate + np.einsum("ij,ij->i", u, plots.sensor_vel[:, :d])
+            x[:, d:] = u * vr[:, None]
+            uu = u[:, :, None] * u[:, None, :]
+            Pv = Pv - uu * (speed_sigma**2 - sensor.sigma_range_rate**2)
     P[:, d:, d:] = Pv
     return x, P
 
@@ -629,35 +621,64 @@ def run_tracks(
     by_rank = np.argsort(rank, kind="stable")
     bounds = np.searchsorted(rank[by_rank], np.arange(int(rank.max()) + 2))
     out: dict[str, NDArray[Any]] = {}
-    state: TrackState | None = None
     ids = np.arange(T)
-    for k in range(bounds.size - 1):
+    rows = by_rank[bounds[0] : bounds[1]]  # the first plot of every track
+    state = _start(flt, initiate, plots.take(rows[np.argsort(ti[rows])]))
+    _emit(flt, state, rows[np.argsort(ti[rows])], out, N)
+    started = state.status == PlotStatus.INITIATED
+    for k in range(1, bounds.size - 1):
         rows = by_rank[bounds[k] : bounds[k + 1]]
         tracks = ti[rows]
         pk = plots.take(rows)
-        if k == 0:
-            x0, P0 = initiate(pk)
-            s = flt.initiate(pk.t, x0, P0)
-            full = s.take(np.argsort(tracks))  # batch position == track number
-            state = full
-        else:
-            assert state is not None
-            if tracks.size == T and np.array_equal(tracks, ids):  # every track, in order
-                s = state = flt.update(flt.predict(state, pk.t), pk)
-            else:
-                s = flt.update(flt.predict(state.take(tracks), pk.t), pk)
-                state = state.put(tracks, s)
-        cols = flt.columns(s)
-        cols["status"] = s.status
-        cols["nis"] = s.nis
-        for name, v in cols.items():
-            arr = out.get(name)
-            if arr is None:
-                arr = out[name] = np.empty(N, dtype=np.asarray(v).dtype)
-            arr[rows] = v
+        if tracks.size == T and started.all() and np.array_equal(tracks, ids):
+            state = flt.update(flt.predict(state, pk.t), pk)  # every track, in order
+            _emit(flt, state, rows, out, N)
+            continue
+        new = ~started[tracks]
+        if new.any():  # tracks whose start was rejected: start again on this plot
+            s = _start(flt, initiate, pk.take(new))
+            state = state.put(tracks[new], s)
+            started[tracks[new]] = s.status == PlotStatus.INITIATED
+            _emit(flt, s, rows[new], out, N)
+        run = ~new
+        if run.any():
+            s = flt.update(flt.predict(state.take(tracks[run]), pk.t[run]), pk.take(run))
+            state = state.put(tracks[run], s)
+            _emit(flt, s, rows[run], out, N)
     labels = np.array([s.label for s in PlotStatus])
     out["status"] = labels[out["status"]]
     return out
+
+
+def _start(
+    flt: RecursiveFilter,
+    initiate: Callable[[Plots], tuple[FloatArray, FloatArray]],
+    plots: Plots,
+) -> TrackState:
+    """Initiate tracks on plots; a plot that gives a non-finite start is REJECTED (the
+    track starts on its next plot)."""
+    with np.errstate(all="ignore"):
+        x0, P0 = initiate(plots)
+    s = flt.initiate(plots.t, x0, P0)
+    ok = np.isfinite(s.x).all(-1) & np.isfinite(s.P).all((-1, -2))
+    if ok.all():
+        return s
+    status = np.where(ok, PlotStatus.INITIATED, PlotStatus.REJECTED).astype(np.int8)
+    return s.replace(status=status)
+
+
+def _emit(
+    flt: RecursiveFilter, s: TrackState, rows: IntArray, out: dict[str, NDArray[Any]], N: int
+) -> None:
+    """Write the output columns of batch ``s`` at ``rows``."""
+    cols = flt.columns(s)
+    cols["status"] = s.status
+    cols["nis"] = s.nis
+    for name, v in cols.items():
+        arr = out.get(name)
+        if arr is None:
+            arr = out[name] = np.empty(N, dtype=np.asarray(v).dtype)
+        arr[rows] = v
 
 
 def check_finite_state(state: TrackState) -> bool:

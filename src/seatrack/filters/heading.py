@@ -4,7 +4,7 @@ The turning filter (:mod:`seatrack.filters.turning`) runs a second, two-state fi
 heading of its CV-EKF velocity: state ``(b, omega)``, heading (rad, ``(-pi, pi]``) and turn
 rate (rad/s, clockwise positive), with the wrapped heading innovation. Single-track
 functions (:func:`heading_filter_init`, :func:`heading_filter_step`) and their batched
-forms (:func:`heading_predict_batch`, :func:`heading_update_batch`).
+forms compiled in :mod:`seatrack.filters.turning_kernel`.
 """
 
 from __future__ import annotations
@@ -33,8 +33,6 @@ __all__ = [
     "heading_filter_noise",
     "heading_filter_init",
     "heading_filter_step",
-    "heading_predict_batch",
-    "heading_update_batch",
 ]
 
 
@@ -165,28 +163,3 @@ def heading_filter_step(
     )
     u.x[0] = wrap_pi(u.x[0])
     return HeadingEstimate(u.x, u.P, float(u.y[0]), u.K[:, 0].copy())
-
-
-def heading_predict_batch(
-    s: FloatArray, P: FloatArray, dt: FloatArray, q: float, form: str
-) -> tuple[FloatArray, FloatArray]:
-    """S2 heading-filter prediction for a batch: ``b' = b + omega D`` (wrapped)."""
-    F = cv_transition(dt, 1)
-    Q = cv_noise(dt, q, 1)
-    if form == "diagonal":
-        Q = Q * np.eye(2)
-    sp, Pp = kalman.predict(s, P, F, Q)
-    sp[:, 0] = wrap_pi(sp[:, 0])
-    return sp, Pp
-
-
-def heading_update_batch(
-    s: FloatArray, P: FloatArray, b: FloatArray, var_b: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    """S2 heading-filter update on the measured heading (wrapped innovation, Joseph form)."""
-    u = kalman.extended_update(
-        s, P, b[:, None], s[:, :1], H_HEADING, var_b[:, None, None], ANGULAR_HEADING, False
-    )
-    x = u.x
-    x[:, 0] = wrap_pi(x[:, 0])
-    return x, u.P

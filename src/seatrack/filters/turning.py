@@ -62,12 +62,11 @@ from seatrack.filters.heading import (
     heading_filter_noise,
     heading_filter_step,
     heading_jacobian,
-    heading_predict_batch,
-    heading_update_batch,
     heading_variance,
     velocity_significance,
 )
-from seatrack.geometry import bearing, wrap_pi
+from seatrack.filters.turning_kernel import turn_logic
+from seatrack.geometry import bearing
 from seatrack.models import RangeBearing, RangeBearingElevation
 from seatrack.models.motion import cv_noise, cv_transition
 
@@ -455,31 +454,6 @@ class TurningTrack:
 # ---------------------------------------------------------------------------
 # The filter on the contract (batched), and the one-track shell
 # ---------------------------------------------------------------------------
-def _push(queue: FloatArray, count: NDArray[np.int64], omega: FloatArray, push: Any) -> Any:
-    """S3 FIFO push where ``push``: returns ``(queue, count, ready)`` (:func:`push_turn_rate`
-    for a batch; ``queue (B, M)`` oldest first, ``count`` values held)."""
-    M = queue.shape[1]
-    full = count >= M
-    shifted = np.where(full[:, None], np.roll(queue, -1, axis=1), queue)
-    slot = np.minimum(count, M - 1)
-    new = shifted.copy()
-    new[np.arange(queue.shape[0]), slot] = omega
-    q = np.where(push[:, None], new, queue)
-    n = np.where(push, np.minimum(count + 1, M), count)
-    return q, n, push & full
-
-
-def _vote(window: FloatArray, K: int, threshold: float) -> tuple[NDArray[np.int8], FloatArray]:
-    """S4 :func:`fuzzy_vote` for a batch of windows ``(B, M)``."""
-    diff = np.diff(window, axis=1)
-    delta = np.abs(window[:, -1] - window[:, 0])
-    big = delta > threshold
-    rising = big & (np.count_nonzero(diff > 0, axis=1) >= K)
-    falling = big & ~rising & (np.count_nonzero(diff < 0, axis=1) >= K)
-    st = np.where(rising, TurnState.RISING, np.where(falling, TurnState.FALLING, 0))
-    return st.astype(np.int8), delta
-
-
 class Turning:
     """The turning-target filter (spec S1-S6) on the filter contract, for a batch of tracks.
 
@@ -559,47 +533,23 @@ class Turning:
         return finish_update(state, res.x, res.P, res.nis, res.log_likelihood, state.t, aux, ok)
 
     def _turn_logic(self, st: TrackState) -> dict[str, Any]:
-        """S2-S5 on the filtered states of a batch: heading filter, queue, vote, next gain."""
-        c, d = self.config, self.d
-        a = st.aux
-        v = st.x[:, d:]
-        var_v = np.diagonal(st.P, axis1=-2, axis2=-1)[:, d:]
-        d_t = velocity_significance(v, var_v)
-        active = np.asarray(d_t > self.v_threshold)
-        hs, hP, ht = a["hs"], a["hP"], a["ht"]
-        d_w = np.full(len(st), np.nan)
-        state = np.zeros(len(st), np.int8)
-        gain = np.ones(len(st))
-        queue, qn = a["queue"], a["qn"]
-        if active.any():
-            cov = st.P[:, d : d + 2, d : d + 2] if c.heading_cross_covariance else var_v[:, :2]
-            with np.errstate(all="ignore"):
-                b = np.asarray(heading(v))
-                var_b = np.asarray(heading_variance(v[:, :2], cov))
-            started = active & np.isfinite(ht)
-            dt_h = np.where(started, st.t - np.where(started, ht, 0.0), 0.0)
-            sp, Pp = heading_predict_batch(hs, hP, dt_h, c.q_heading, c.heading_noise)
-            su, Pu = heading_update_batch(
-                sp, Pp, np.where(active, b, 0.0), np.where(active, var_b, 1.0)
-            )
-            init_s = np.stack([wrap_pi(b), np.zeros_like(b)], -1)
-            init_P = np.zeros_like(hP)
-            init_P[:, 0, 0] = var_b
-            init_P[:, 1, 1] = c.sigma_omega0**2
-            hs = np.where(started[:, None], su, np.where(active[:, None], init_s, hs))
-            hP = np.where(started[:, None, None], Pu, np.where(active[:, None, None], init_P, hP))
-            ht = np.where(active, st.t, ht)
-            omega = hs[:, 1]
-            d_w = np.where(active, turn_rate_significance(omega, hP[:, 1, 1]), np.nan)
-            push = active & (d_w > c.turn_rate_threshold)
-            queue, qn, ready = _push(queue, qn, omega, push)
-            vote, delta = _vote(queue, c.count, c.delta_omega_threshold)
-            state = np.where(ready, vote, 0).astype(np.int8)
-            g = noise_gain(delta, c.gain_reference, c.gain_power, c.gain_max)
-            gain = np.where(state != 0, g, 1.0)
+        """S2-S5 on the filtered states of a batch (compiled: :func:`turn_logic`)."""
+        c, d, a = self.config, self.d, st.aux
+        B = len(st)
+        hs, hP, ht = a["hs"].copy(), a["hP"].copy(), a["ht"].copy()
+        queue, qn = a["queue"].copy(), a["qn"].copy()
+        d_t, d_w, gain = np.empty(B), np.empty(B), np.empty(B)
+        state = np.empty(B, np.int8)
+        turn_logic(
+            st.x, st.P, st.t, d, hs, hP, ht, queue, qn, self.v_threshold,
+            c.heading_cross_covariance, c.sigma_omega0, c.q_heading,
+            c.heading_noise == "diagonal", c.turn_rate_threshold, c.count,
+            c.delta_omega_threshold, c.gain_reference, c.gain_power, c.gain_max,
+            d_t, d_w, state, gain,
+        )  # fmt: skip
         return {
             "hs": hs, "hP": hP, "ht": ht, "queue": queue, "qn": qn, "gain": gain,
-            "d_t": np.asarray(d_t, dtype=float), "d_w": d_w, "turn_state": state,
+            "d_t": d_t, "d_w": d_w, "turn_state": state,
         }  # fmt: skip
 
     def columns(self, state: TrackState) -> dict[str, NDArray[Any]]:

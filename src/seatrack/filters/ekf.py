@@ -29,7 +29,8 @@ from seatrack.filters.base import (
     step_times,
     wrap_angles,
 )
-from seatrack.models.motion import cv_noise, cv_transition
+from seatrack.models.measurement import polar_measurement
+from seatrack.models.motion import cv_matrices
 
 FloatArray = NDArray[np.float64]
 
@@ -106,38 +107,28 @@ class EKF:
     def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
         """Predict to ``t``; ``aux["F"]`` keeps the transition matrix (for the RTS smoother)."""
         tt, dt = step_times(state, t)
-        F = cv_transition(dt, self.d)
-        Q = cv_noise(dt, self.config.q, self.d)
+        F, Q = cv_matrices(dt, self.config.q, self.d)
         x, P = kalman.predict(state.x, state.P, F, Q)
-        return predicted(state, tt, x, P, {"F": F})
+        return predicted(state, tt, x, P, {"F": np.broadcast_to(F, P.shape)})
 
     def _sensor(self, plots: Plots) -> FloatArray:
         return sensor_state(plots, self.d)
 
     def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
-        s = self._sensor(plots)
-        H = self.model.jacobian(state.x, s)
-        y = plots.polar(self.range_rate) - self.model.h(state.x, s)
+        hx, H = polar_measurement(state.x, self._sensor(plots), self.d, self.range_rate)
+        y = plots.polar(self.range_rate) - hx
         y = wrap_angles(y, self._angular)
         S = H @ state.P @ np.swapaxes(H, -1, -2) + self.R
         return y, kalman.symmetrize(S)
 
     def update(self, state: TrackState, plots: Plots) -> TrackState:
-        s = self._sensor(plots)
         z = plots.polar(self.range_rate)
         ok = np.asarray(np.isfinite(z).all(-1) & np.isfinite(state.x).all(-1))
+        hx, H = polar_measurement(state.x, self._sensor(plots), self.d, self.range_rate)
         with np.errstate(all="ignore"):  # an absurd plot is rejected below, not warned about
-            hx = self.model.h(state.x, s)
             z = np.where(ok[:, None], z, hx)
             res = kalman.extended_update(
-                state.x,
-                state.P,
-                z,
-                hx,
-                self.model.jacobian(state.x, s),
-                self.R,
-                self._angular,
-                check=False,
+                state.x, state.P, z, hx, H, self.R, self._angular, check=False
             )
         return finish_update(state, res.x, res.P, res.nis, res.log_likelihood, state.t, ok=ok)
 

@@ -56,7 +56,7 @@ from seatrack.filters.robust_baselines import (
     student_t_update,
 )
 from seatrack.geometry import angle_diff, rotation_to_beam
-from seatrack.models.measurement import RangeBearing
+from seatrack.models.measurement import polar_measurement
 
 FloatArray = NDArray[np.float64]
 
@@ -154,7 +154,6 @@ class _Sonar:
         self.d = 2
         self.range_rate = False
         self.k = self.model.order
-        self.meas = RangeBearing(n=2 * self.k)
         self.r_nom = np.array([self.sensor.sigma_range**2, self.sensor.sigma_azimuth**2])
 
     @property
@@ -181,10 +180,13 @@ class _Sonar:
         L0 = axis_noise(dt, self.model.sigma_a, self.k) if noise else np.zeros_like(Phi)
         return Phi, L0
 
+    def _measurement(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
+        s = np.concatenate([plots.sensor[:, :2], plots.sensor_vel[:, :2]], -1)
+        return polar_measurement(state.x, s, 2, False)
+
     def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
-        s = plots.sensor[:, :2]
-        H = self.meas.jacobian(state.x, s)
-        y = wrap_angles(plots.polar(False) - self.meas.h(state.x, s), np.array([0.0, 1.0]))
+        hx, H = self._measurement(state, plots)
+        y = wrap_angles(plots.polar(False) - hx, np.array([0.0, 1.0]))
         S = H @ state.P @ np.swapaxes(H, -1, -2) + np.diag(self.r_nom)
         return y, kalman.symmetrize(S)
 
@@ -211,14 +213,12 @@ class RangeBearingEKF(_Sonar):
         return predicted(state, tt, x, P)
 
     def update(self, state: TrackState, plots: Plots) -> TrackState:
-        s = plots.sensor[:, :2]
         z = plots.polar(False)
         ok = np.asarray(np.isfinite(z).all(-1))
+        hx, H = self._measurement(state, plots)
         with np.errstate(all="ignore"):
-            hx = self.meas.h(state.x, s)
             z = np.where(ok[:, None], z, hx)
             R = np.diag(self.r_nom)
-            H = self.meas.jacobian(state.x, s)
             res, flags = self._update_rule()(state.x, state.P, z, hx, H, R, check=False)
         aux = {"outlier": flags & ok[:, None]}
         return finish_update(state, res.x, res.P, res.nis, res.log_likelihood, state.t, aux, ok)

@@ -68,7 +68,8 @@ from seatrack.filters.heading import (
 from seatrack.filters.turning_kernel import turn_logic
 from seatrack.geometry import bearing
 from seatrack.models import RangeBearing, RangeBearingElevation
-from seatrack.models.motion import cv_noise, cv_transition
+from seatrack.models.measurement import polar_measurement
+from seatrack.models.motion import cv_matrices, cv_noise, cv_transition
 
 FloatArray = NDArray[np.float64]
 
@@ -507,29 +508,29 @@ class Turning:
     def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
         tt, dt = step_times(state, t)
         gain = state.aux["gain"]
-        Q = cv_noise(dt, self.config.q_nominal, self.d) * gain[:, None, None]
-        x, P = kalman.predict(state.x, state.P, cv_transition(dt, self.d), Q)
+        F, Q = cv_matrices(dt, self.config.q_nominal, self.d)
+        x, P = kalman.predict(state.x, state.P, F, Q * gain[:, None, None])
         return predicted(state, tt, x, P, {"q_gain": gain, "gain": np.ones(len(state))})
 
+    def _measurement(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
+        s = np.concatenate([plots.sensor[:, : self.d], plots.sensor_vel[:, : self.d]], -1)
+        return polar_measurement(state.x, s, self.d, False)
+
     def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
-        s = plots.sensor
-        H = self.model.jacobian(state.x, s)
-        y = wrap_angles(plots.polar(False) - self.model.h(state.x, s), self._angular)
+        hx, H = self._measurement(state, plots)
+        y = wrap_angles(plots.polar(False) - hx, self._angular)
         return y, kalman.symmetrize(H @ state.P @ np.swapaxes(H, -1, -2) + self.R)
 
     def update(self, state: TrackState, plots: Plots) -> TrackState:
-        s = plots.sensor
         z = plots.polar(False)
         ok = np.asarray(np.isfinite(z).all(-1))
+        hx, H = self._measurement(state, plots)
         with np.errstate(all="ignore"):
-            hx = self.model.h(state.x, s)
             z = np.where(ok[:, None], z, hx)
             res = kalman.extended_update(
-                state.x, state.P, z, hx, self.model.jacobian(state.x, s), self.R,
-                self._angular, check=False,
-            )  # fmt: skip
-            post = state.replace(x=res.x, P=res.P)
-            aux = self._turn_logic(post)
+                state.x, state.P, z, hx, H, self.R, self._angular, check=False
+            )
+            aux = self._turn_logic(state.replace(x=res.x, P=res.P))
         return finish_update(state, res.x, res.P, res.nis, res.log_likelihood, state.t, aux, ok)
 
     def _turn_logic(self, st: TrackState) -> dict[str, Any]:

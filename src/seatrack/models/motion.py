@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import ClassVar, Protocol
 
 import numpy as np
@@ -39,6 +40,7 @@ __all__ = [
     "CoordinatedTurn",
     "cv_transition",
     "cv_noise",
+    "cv_matrices",
     "cv_noise_discrete",
     "ca_transition",
     "ca_noise",
@@ -88,6 +90,21 @@ def cv_noise(dt: ArrayLike, q: ArrayLike, d: int = 2) -> FloatArray:
         * qq[..., None, None]
     )
     return _kron_blocks(blk, d)
+
+
+@lru_cache(maxsize=256)
+def _cv_pair(dt: float, q: float, d: int) -> tuple[FloatArray, FloatArray]:
+    return cv_transition(dt, d), cv_noise(dt, q, d)
+
+
+def cv_matrices(dt: ArrayLike, q: float, d: int = 2) -> tuple[FloatArray, FloatArray]:
+    """CV ``(F, Q)`` for intervals ``dt (B,)``: one cached ``(2d, 2d)`` pair when every
+    interval is the same (radar scans repeat one ``dt``; the arrays are shared, do not
+    modify them), else ``(B, 2d, 2d)`` stacks."""
+    t = np.asarray(dt, dtype=float)
+    if t.size and np.all(t == t.flat[0]):
+        return _cv_pair(float(t.flat[0]), float(q), d)
+    return cv_transition(t, d), cv_noise(t, q, d)
 
 
 def cv_noise_discrete(dt: ArrayLike, sigma_a: ArrayLike, d: int = 2) -> FloatArray:

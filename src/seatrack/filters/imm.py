@@ -601,7 +601,10 @@ class CVCTIMM:
     def update(self, state: TrackState, plots: Plots) -> TrackState:
         z, R, sensor = self._measurement(plots)
         hx, y, S = self._innovation(state, z, R, sensor)
-        ok = np.isfinite(z).all(-1) & np.isfinite(R).all((-1, -2)) & np.isfinite(hx).all(-1)
+        ok = np.asarray(
+            np.isfinite(z).all(-1) & np.isfinite(R).all((-1, -2)) & np.isfinite(hx).all(-1),
+            dtype=bool,
+        )
         z = np.where(ok[:, None], z, np.where(np.isfinite(hx), hx, 0.0))
         R = np.where(ok[:, None, None], R, np.eye(R.shape[-1]))
         Rk = R[:, None] if self.imm.fused_H is not None and sensor is None else R

@@ -628,7 +628,7 @@ class MultiModel:
 
     def update(self, state: TrackState, plots: Plots) -> TrackState:
         z, R = self.convert(plots)
-        ok = np.isfinite(z).all(-1) & np.isfinite(R).all((-1, -2))
+        ok = np.asarray(np.isfinite(z).all(-1) & np.isfinite(R).all((-1, -2)), dtype=bool)
         z = np.where(ok[:, None], z, np.nan)
         R = np.where(ok[:, None, None], R, np.eye(self.d))
         rho = plots.range_rate if self.range_rate and plots.range_rate is not None else np.nan

@@ -288,7 +288,7 @@ class KalmanNav:
     noise : ProcessNoise
     """
 
-    state_names = STATE_NAMES
+    state_names: tuple[str, ...] = STATE_NAMES
 
     def __init__(self, noise: ProcessNoise | None = None) -> None:
         self.noise = noise or ProcessNoise()
@@ -332,7 +332,7 @@ class SRIFNav:
     derived from them.
     """
 
-    state_names = STATE_NAMES
+    state_names: tuple[str, ...] = STATE_NAMES
 
     def __init__(self, noise: ProcessNoise | None = None) -> None:
         self.noise = noise or ProcessNoise()

@@ -40,7 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from seatrack import kalman
 from seatrack.config import param
-from seatrack.filters.converted import polar_jacobian
+from seatrack.filters.converted import convert_plots, polar_jacobian
 from seatrack.geometry import spherical_to_cart, wrap_pi
 from seatrack.models.measurement import RangeBearing, RangeBearingElevation, RangeRate, Stacked
 
@@ -58,6 +58,11 @@ __all__ = [
     "plot_gaussian",
     "two_point_gaussian",
     "common_columns",
+    "cartesian_names",
+    "converted_positions",
+    "conversion_param",
+    "speed_sigma_param",
+    "usable",
     "finish_update",
     "predicted",
     "step_times",
@@ -360,6 +365,61 @@ class SensorNoise:
         1.0, key="sigma_range_rate_mps", unit="m/s", doc="range-rate noise std", min=0,
         exclusive_min=True,
     )  # fmt: skip
+
+
+def speed_sigma_param(default: float, aliases: Sequence[str] = ()) -> Any:
+    """The ``initial_speed_sigma`` field every method's config has (key
+    ``initial_speed_sigma_mps``): the velocity std per axis the initiator gives a new track."""
+    return param(
+        default,
+        key="initial_speed_sigma_mps",
+        unit="m/s",
+        doc="velocity std of a new track (per axis)",
+        min=0,
+        exclusive_min=True,
+        aliases=aliases,
+    )
+
+
+def conversion_param() -> Any:
+    """The ``conversion`` field of the methods on converted plots."""
+    return param(
+        "unbiased", choices=("unbiased", "linearized"), doc="polar-to-Cartesian conversion"
+    )
+
+
+def cartesian_names(d: int) -> tuple[str, ...]:
+    """``x, y, [z], vx, vy, [vz]``: the first components of every filter's state."""
+    axes = ("x", "y", "z")[:d]
+    return axes + tuple("v" + a for a in axes)
+
+
+def converted_positions(
+    plots: Plots, sensor: SensorNoise, method: str
+) -> tuple[FloatArray, FloatArray]:
+    """Converted Cartesian plot positions ``(N, d)`` and covariances ``(N, d, d)``
+    (:func:`seatrack.filters.converted.convert_plots`); absurd plots give non-finite
+    values, without warnings."""
+    with np.errstate(all="ignore"):
+        cm = convert_plots(
+            plots.range,
+            plots.azimuth,
+            plots.elevation,
+            sensor.sigma_range,
+            sensor.sigma_azimuth,
+            sensor.sigma_elevation if plots.elevation is not None else None,
+            sensor=plots.sensor,
+            method=method,  # type: ignore[arg-type]
+        )
+    return cm.z, cm.R
+
+
+def usable(z: FloatArray, hx: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """Plots ``z (B, m)`` with every unusable (non-finite) one replaced by its prediction
+    ``hx`` -- so that an update runs without warnings -- and the mask of the usable ones
+    (pass it to :func:`finish_update` as ``ok``)."""
+    ok = np.asarray(np.isfinite(z).all(-1), dtype=bool)
+    return np.where(ok[:, None], z, np.where(np.isfinite(hx), hx, 0.0)), ok
 
 
 def measurement_model(d: int, n: int, range_rate: bool) -> Any:

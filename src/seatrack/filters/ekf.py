@@ -21,12 +21,15 @@ from seatrack.filters.base import (
     Plots,
     SensorNoise,
     TrackState,
+    cartesian_names,
     common_columns,
     finish_update,
     measurement_model,
     measurement_noise,
     predicted,
+    speed_sigma_param,
     step_times,
+    usable,
     wrap_angles,
 )
 from seatrack.models.measurement import polar_measurement
@@ -47,14 +50,7 @@ class EKFConfig:
     """Parameters of the constant-velocity EKF (``seatrack track --method ekf``)."""
 
     q: float = param(1.0, unit="m^2/s^3", doc="white-noise acceleration PSD", min=0)
-    initial_speed_sigma: float = param(
-        50.0,
-        key="initial_speed_sigma_mps",
-        unit="m/s",
-        doc="velocity std of a new track (per axis)",
-        min=0,
-        exclusive_min=True,
-    )
+    initial_speed_sigma: float = speed_sigma_param(50.0)
     use_range_rate: bool = param(True, doc="use the plots' range rate when they have one")
 
 
@@ -95,8 +91,7 @@ class EKF:
 
     @property
     def state_names(self) -> tuple[str, ...]:
-        axes = ("x", "y", "z")[: self.d]
-        return axes + tuple("v" + a for a in axes)
+        return cartesian_names(self.d)
 
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
         xx = np.asarray(x, dtype=float)
@@ -122,11 +117,9 @@ class EKF:
         return y, kalman.symmetrize(S)
 
     def update(self, state: TrackState, plots: Plots) -> TrackState:
-        z = plots.polar(self.range_rate)
-        ok = np.asarray(np.isfinite(z).all(-1) & np.isfinite(state.x).all(-1))
         hx, H = polar_measurement(state.x, self._sensor(plots), self.d, self.range_rate)
+        z, ok = usable(plots.polar(self.range_rate), hx)
         with np.errstate(all="ignore"):  # an absurd plot is rejected below, not warned about
-            z = np.where(ok[:, None], z, hx)
             res = kalman.extended_update(
                 state.x, state.P, z, hx, H, self.R, self._angular, check=False
             )

@@ -48,8 +48,11 @@ from seatrack.filters.base import (
     SensorNoise,
     TrackState,
     common_columns,
+    conversion_param,
+    converted_positions,
     finish_update,
     predicted,
+    speed_sigma_param,
     step_times,
 )
 from seatrack.models.measurement import Position, RangeRate, Stacked
@@ -472,18 +475,8 @@ class CVCTIMMConfig:
     q_ct: float = param(100.0, unit="m^2/s^3", doc="CT white-noise acceleration PSD", min=0)
     q_omega: float = param(1e-3, unit="rad^2/s^3", doc="CT turn-rate PSD", min=0)
     p_stay: float = param(0.95, doc="IMM transition diagonal", min=0, max=1)
-    conversion: str = param(
-        "unbiased", choices=("unbiased", "linearized"), doc="polar-to-Cartesian conversion"
-    )
-    initial_speed_sigma: float = param(
-        300.0,
-        key="initial_speed_sigma_mps",
-        unit="m/s",
-        doc="velocity std of a new track (per axis)",
-        min=0,
-        exclusive_min=True,
-        aliases=("initial_velocity_std_mps",),
-    )
+    conversion: str = conversion_param()
+    initial_speed_sigma: float = speed_sigma_param(300.0, aliases=("initial_velocity_std_mps",))
     initial_turn_rate_sigma: float = param(
         5.0,
         key="initial_turn_rate_std_dps",
@@ -558,29 +551,17 @@ class CVCTIMM:
     def _measurement(self, plots: Plots) -> tuple[FloatArray, FloatArray, Any]:
         """Converted positions (with range rate when used), their covariances, the sensor
         state of the range-rate model (None without range rate)."""
-        from seatrack.filters.converted import convert_plots
-
         sn, d = self.sensor, self.d
-        with np.errstate(all="ignore"):
-            cm = convert_plots(
-                plots.range,
-                plots.azimuth,
-                plots.elevation,
-                sn.sigma_range,
-                sn.sigma_azimuth,
-                sn.sigma_elevation if plots.elevation is not None else None,
-                sensor=plots.sensor,
-                method=self.config.conversion,  # type: ignore[arg-type]
-            )
+        z, R = converted_positions(plots, sn, self.config.conversion)
         if not self.range_rate or plots.range_rate is None:
-            return cm.z, cm.R, None
+            return z, R, None
         # Position.h subtracts the sensor position given with the range-rate sensor state
-        z = np.concatenate([cm.z - plots.sensor[:, :d], plots.range_rate[:, None]], -1)
-        R = np.zeros((len(plots), d + 1, d + 1))
-        R[:, :d, :d] = cm.R
-        R[:, d, d] = sn.sigma_range_rate**2
+        zr = np.concatenate([z - plots.sensor[:, :d], plots.range_rate[:, None]], -1)
+        Rr = np.zeros((len(plots), d + 1, d + 1))
+        Rr[:, :d, :d] = R
+        Rr[:, d, d] = sn.sigma_range_rate**2
         sensor = np.concatenate([plots.sensor[:, :d], plots.sensor_vel[:, :d]], -1)
-        return z, R, sensor
+        return zr, Rr, sensor
 
     def _innovation(
         self, state: TrackState, z: FloatArray, R: FloatArray, sensor: Any

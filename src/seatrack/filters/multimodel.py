@@ -66,12 +66,15 @@ from seatrack.filters.base import (
     Plots,
     SensorNoise,
     TrackState,
+    cartesian_names,
     common_columns,
+    conversion_param,
+    converted_positions,
     finish_update,
     predicted,
+    speed_sigma_param,
     step_times,
 )
-from seatrack.filters.converted import convert_plots
 from seatrack.filters.multimodel_kernel import step_kernel
 from seatrack.geometry import G0
 
@@ -504,18 +507,8 @@ class MultiModelTrackConfig:
         10.0, key="accel_g", unit="g", doc="magnitude of the N/E/S/W hypotheses", min=0
     )
     p_stay: float = param(0.9, doc="diagonal of the hypothesis transition matrix", min=0, max=1)
-    conversion: str = param(
-        "unbiased", choices=("unbiased", "linearized"), doc="polar-to-Cartesian conversion"
-    )
-    initial_speed_sigma: float = param(
-        300.0,
-        key="initial_speed_sigma_mps",
-        unit="m/s",
-        doc="velocity std of a new track (per axis)",
-        min=0,
-        exclusive_min=True,
-        aliases=("initial_velocity_std_mps",),
-    )
+    conversion: str = conversion_param()
+    initial_speed_sigma: float = speed_sigma_param(300.0, aliases=("initial_velocity_std_mps",))
     integrated_covariance: bool = param(True, doc="spread-of-means terms (steps 8 and 11)")
     range_rate_likelihood: str = param(
         "independent",
@@ -577,8 +570,7 @@ class MultiModel:
 
     @property
     def state_names(self) -> tuple[str, ...]:
-        axes = ("x", "y", "z")[: self.d]
-        return axes + tuple("v" + a for a in axes)
+        return cartesian_names(self.d)
 
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
         xx = np.asarray(x, dtype=float)
@@ -607,19 +599,7 @@ class MultiModel:
 
     def convert(self, plots: Plots) -> tuple[FloatArray, FloatArray]:
         """Converted positions ``(B, d)`` and covariances ``(B, d, d)`` of the plots."""
-        sn = self.sensor
-        with np.errstate(all="ignore"):
-            cm = convert_plots(
-                plots.range,
-                plots.azimuth,
-                plots.elevation,
-                sn.sigma_range,
-                sn.sigma_azimuth,
-                sn.sigma_elevation if plots.elevation is not None else None,
-                sensor=plots.sensor,
-                method=self.config.conversion,  # type: ignore[arg-type]
-            )
-        return cm.z, cm.R
+        return converted_positions(plots, self.sensor, self.config.conversion)
 
     def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
         z, R = self.convert(plots)

@@ -34,7 +34,9 @@ from seatrack.filters.base import (
     common_columns,
     finish_update,
     predicted,
+    speed_sigma_param,
     step_times,
+    usable,
     wrap_angles,
 )
 from seatrack.filters.robust import (
@@ -81,10 +83,7 @@ class SonarMotionConfig:
 
     sigma_a: float = param(0.02, unit="m/s^2", doc="constant disturbance L0 (accel. std)", min=0)
     acceleration: bool = param(False, doc="full state with acceleration (else truncated)")
-    initial_speed_sigma: float = param(
-        8.0, key="initial_speed_sigma_mps", unit="m/s", doc="velocity std of a new track",
-        min=0, exclusive_min=True, aliases=("init_sigma_v",),
-    )  # fmt: skip
+    initial_speed_sigma: float = speed_sigma_param(8.0, aliases=("init_sigma_v",))
     init_sigma_acc: float = param(
         0.2, unit="m/s^2", doc="acceleration std of a new track", min=0, exclusive_min=True
     )
@@ -213,11 +212,9 @@ class RangeBearingEKF(_Sonar):
         return predicted(state, tt, x, P)
 
     def update(self, state: TrackState, plots: Plots) -> TrackState:
-        z = plots.polar(False)
-        ok = np.asarray(np.isfinite(z).all(-1))
         hx, H = self._measurement(state, plots)
+        z, ok = usable(plots.polar(False), hx)
         with np.errstate(all="ignore"):
-            z = np.where(ok[:, None], z, hx)
             R = np.diag(self.r_nom)
             res, flags = self._update_rule()(state.x, state.P, z, hx, H, R, check=False)
         aux = {"outlier": flags & ok[:, None]}

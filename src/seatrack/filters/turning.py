@@ -48,11 +48,14 @@ from seatrack.filters.base import (
     PlotStatus,
     SensorNoise,
     TrackState,
+    cartesian_names,
     common_columns,
     finish_update,
     plot_gaussian,
     predicted,
+    speed_sigma_param,
     step_times,
+    usable,
     wrap_angles,
 )
 from seatrack.filters.heading import (
@@ -151,10 +154,7 @@ class TurningConfig:
         0.5, key="q", unit="m^2/s^3", doc="nominal white-acceleration PSD", min=0,
         exclusive_min=True,
     )  # fmt: skip
-    sigma_velocity0: float = param(
-        300.0, key="initial_speed_sigma_mps", unit="m/s", doc="velocity std of a new track",
-        min=0, exclusive_min=True, aliases=("sigma_velocity0_mps",),
-    )  # fmt: skip
+    sigma_velocity0: float = speed_sigma_param(300.0, aliases=("sigma_velocity0_mps",))
     velocity_threshold: float | None = param(None, doc="S2 threshold on d_t (None: N)", min=0)
     heading_cross_covariance: bool = param(False, doc="S2 heading variance with cross term")
     sigma_omega0: float = param(
@@ -487,8 +487,7 @@ class Turning:
 
     @property
     def state_names(self) -> tuple[str, ...]:
-        axes = ("x", "y", "z")[: self.d]
-        return axes + tuple("v" + a for a in axes)
+        return cartesian_names(self.d)
 
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
         st = TrackState.new(t, x, P)
@@ -522,11 +521,9 @@ class Turning:
         return y, kalman.symmetrize(H @ state.P @ np.swapaxes(H, -1, -2) + self.R)
 
     def update(self, state: TrackState, plots: Plots) -> TrackState:
-        z = plots.polar(False)
-        ok = np.asarray(np.isfinite(z).all(-1))
         hx, H = self._measurement(state, plots)
+        z, ok = usable(plots.polar(False), hx)
         with np.errstate(all="ignore"):
-            z = np.where(ok[:, None], z, hx)
             res = kalman.extended_update(
                 state.x, state.P, z, hx, H, self.R, self._angular, check=False
             )

@@ -276,6 +276,32 @@ def huber_filter(
     return _run_ekf(t, z, sensor, m, partial(huber_update, r_nom=r_nom, config=cfg))
 
 
+def _reweighted(
+    x: FloatArray,
+    P: FloatArray,
+    zn: FloatArray,
+    hx: FloatArray,
+    H: FloatArray,
+    R: FloatArray,
+    r_nom: FloatArray,
+    iterations: int,
+    weights: Callable[[FloatArray, UpdateResult], tuple[FloatArray, NDArray[np.bool_]]],
+    prior_first: bool,
+    check: bool,
+) -> tuple[UpdateResult, NDArray[np.bool_]]:
+    """Iteratively reweighted EKF update: ``R = diag(r_nom / w)`` with weights ``w`` from the
+    residuals ``e`` (the innovation first when ``prior_first``, else the residual at the
+    plain update's estimate); returns the last update and the last weights' flags."""
+    res = extended_update(x, P, zn, hx, H, R, _ANGULAR, check)
+    y = res.y  # innovation (bearing wrapped)
+    flags = np.zeros(x.shape[:-1] + (2,), dtype=bool)
+    for i in range(iterations):
+        e = y if (prior_first and i == 0) else y - np.einsum("...ij,...j->...i", H, res.x - x)
+        w, flags = weights(e, res)
+        res = extended_update(x, P, zn, hx, H, _diag(r_nom / w), _ANGULAR, check)
+    return res, flags
+
+
 def huber_update(
     x: FloatArray,
     P: FloatArray,
@@ -288,16 +314,13 @@ def huber_update(
     check: bool = True,
 ) -> tuple[UpdateResult, NDArray[np.bool_]]:
     """The Huber IRLS measurement update of :func:`huber_filter` (flags: weight < 1)."""
-    w = np.ones(x.shape[:-1] + (2,))
-    res = extended_update(x, P, zn, hx, H, R, _ANGULAR, check)
-    y = res.y  # innovation (bearing wrapped)
-    e = y
-    for _ in range(config.iterations):
+
+    def weights(e: FloatArray, _: UpdateResult) -> tuple[FloatArray, NDArray[np.bool_]]:
         u = np.abs(e) / np.sqrt(r_nom)
         w = np.minimum(1.0, config.c / np.maximum(u, 1e-300))
-        res = extended_update(x, P, zn, hx, H, _diag(r_nom / w), _ANGULAR, check)
-        e = y - np.einsum("...ij,...j->...i", H, res.x - x)
-    return res, w < 1.0
+        return w, w < 1.0
+
+    return _reweighted(x, P, zn, hx, H, R, r_nom, config.iterations, weights, True, check)
 
 
 def student_t_filter(
@@ -334,16 +357,14 @@ def student_t_update(
     """The VB Student-t measurement update of :func:`student_t_filter` (flags: expected
     normalised squared residual > ``flag_threshold``)."""
     nu = config.nu
-    res = extended_update(x, P, zn, hx, H, R, _ANGULAR, check)
-    y = res.y
-    a = np.zeros(x.shape[:-1] + (2,))
-    for _ in range(config.iterations):
-        e = y - np.einsum("...ij,...j->...i", H, res.x - x)
+
+    def weights(e: FloatArray, res: UpdateResult) -> tuple[FloatArray, NDArray[np.bool_]]:
         hph = np.einsum("...ij,...jk,...ik->...i", H, res.P, H)
         a = (e**2 + hph) / r_nom
         if config.per_component:
             lam = (nu + 1.0) / (nu + a)
         else:
             lam = np.repeat(((nu + 2.0) / (nu + a.sum(-1)))[..., None], 2, -1)
-        res = extended_update(x, P, zn, hx, H, _diag(r_nom / lam), _ANGULAR, check)
-    return res, a > config.flag_threshold
+        return lam, a > config.flag_threshold
+
+    return _reweighted(x, P, zn, hx, H, R, r_nom, config.iterations, weights, False, check)

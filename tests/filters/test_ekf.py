@@ -61,7 +61,7 @@ def test_ekf_3d_with_range_rate_is_consistent_on_straight_target():
     assert 4.5 < anees < 8.0
 
 
-def test_track_plots_columns_and_2d():
+def test_ekf_method_columns_and_2d():
     tr = trajectory([3000.0, 1000.0], np.radians(10), 8.0, [Leg.straight(200)], dt=5.0)
     own = trajectory([0.0, 0.0], np.radians(90), 5.0, [Leg.straight(200)], dt=5.0)
     m = observe(

@@ -11,15 +11,18 @@ are plain arithmetic broadcast over leading dimensions):
   ``seatrack.models``); :func:`initial_state` starts it from the first plot.
 * S2 :func:`velocity_significance` (``d_t``), :func:`heading`, :func:`heading_variance`,
   :func:`heading_filter_init` / :func:`heading_filter_step` (the (b, omega) filter with
-  the wrapped heading innovation).
+  the wrapped heading innovation; :mod:`seatrack.filters.heading`).
 * S3 :func:`turn_rate_significance` (``d_omega``) and :func:`push_turn_rate` (FIFO queue).
 * S4 :func:`fuzzy_vote` (rising / falling count vote with the ``delta_omega`` threshold).
 * S5 :func:`noise_gain` ``c(delta_omega)``; the gain applies to the next prediction only
   and returns to 1 (nominal ``Q``) on any scan where S5 does not fire.
 * S6 the output point: :class:`TurningStep` (one scan) / :class:`TurningTrack` (a run).
 
-:class:`TurningFilter` is the thin stateful shell that strings the steps together;
-:func:`track_plots` is the ``seatrack track --method turning`` runner.
+:class:`Turning` is the method on the filter contract (``seatrack track --method
+turning``): the whole batch of tracks per step, S1 through :mod:`seatrack.kalman`, S2-S5
+compiled (:mod:`seatrack.filters.turning_kernel`, equal to the pure functions above); its
+state (heading filter, turn-rate queue, gain) is explicit in ``TrackState.aux``.
+:class:`TurningFilter` is a one-track, plot-by-plot shell over it.
 
 Conventions: x East, y North, z Up; SI units and radians inside. Heading and azimuth are
 clockwise from North (``atan2(vE, vN)``); the heading-filter state and every angle

@@ -270,7 +270,9 @@ class Robust(_Sonar):
         x, Pcart = kalman.predict(state.x, state.P, per_axis_to_flat(Phi), per_axis_to_flat(L0))
         Pc = np.einsum("bij,bcjk,blk->bcil", Phi, a["Pc"], Phi) + L0[:, None]
         fresh = a["fresh"]
-        P = np.where(fresh[:, None, None], Pcart, beam_to_cartesian_cov(Pc, a["psi"]))
+        P = Pcart
+        if not fresh.all():  # tracks with beam blocks: their Cartesian covariance
+            P = np.where(fresh[:, None, None], Pcart, beam_to_cartesian_cov(Pc, a["psi"]))
         aux = {"Pc": Pc, "Pc_prev": a["Pc"], "P_prev": state.P}
         return predicted(state, tt, x, kalman.symmetrize(P), aux)
 
@@ -285,9 +287,11 @@ class Robust(_Sonar):
             if c.rotate_covariance:
                 turn = angle_diff(psi, a["psi"])
                 Pc, Pc_prev = rotate_blocks(Pc, turn), rotate_blocks(Pc_prev, turn)
-            fresh = a["fresh"][:, None, None, None]
-            P0 = np.where(fresh, _beam_blocks(state.P, psi), Pc)
-            Pc_prev = np.where(fresh, _beam_blocks(a["P_prev"], psi), Pc_prev)
+            P0 = Pc
+            if a["fresh"].any():  # first update: blocks of the initiator's covariance
+                fresh = a["fresh"][:, None, None, None]
+                P0 = np.where(fresh, _beam_blocks(state.P, psi), Pc)
+                Pc_prev = np.where(fresh, _beam_blocks(a["P_prev"], psi), Pc_prev)
             beam, info = robust_update(
                 Xp, P0, Pc_prev, psi, r_pred, innov, a["jwin"], self.model, c, self.adaptive
             )

@@ -3,7 +3,7 @@
 Run: ``python benchmarks/tma.py [--quick] [--runs N]``. Prints one table.
 
 Accuracy -- the classic scenario of Ristic, Arulampalam & Gordon (ch. 6; see
-:func:`seatrack.tma.classic_scenario`), the same seeded bearings for every method; final
+:func:`seatrack.simulate.tma.classic_scenario`), the same seeded bearings for every method; final
 position RMSE over the runs and its ratio to sqrt(trace) of the CRB of the final position.
 
 * seatrack: batch solution from the *automatic* start (no prior information at all).
@@ -39,10 +39,10 @@ from scipy.optimize import least_squares
 
 from seatrack.evaluate.montecarlo import format_table
 from seatrack.geometry import knots_to_mps, wrap_pi
+from seatrack.simulate.tma import classic_scenario
 from seatrack.tma import (
     Bearings,
     bearing_residuals,
-    classic_scenario,
     crb,
     leg_starts,
     leg_time_matrix,

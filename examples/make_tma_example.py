@@ -19,8 +19,7 @@ import numpy as np
 from seatrack.geometry import knots_to_mps
 from seatrack.io.measurements_csv import write_bearings
 from seatrack.simulate import Leg, trajectory
-from seatrack.tma import classic_scenario
-from seatrack.tma.scenario import scenario_from_trajectories
+from seatrack.simulate.tma import classic_scenario, scenario_from_trajectories
 
 HERE = Path(__file__).resolve().parent
 

@@ -1,18 +1,31 @@
-"""The ``seatrack`` command line: one command, one sub-command per job.
+r"""The ``seatrack`` command line: one command, one sub-command per job.
 
 Sub-commands live in :mod:`seatrack.commands` (one module each, with a ``register(app)``
 function) so the CLI grows without one file for everything. Heavy imports happen inside
 the commands, keeping ``seatrack --help`` fast.
 
-User errors (:class:`seatrack.io.table.InputError`, ``ValueError`` from configuration)
-are printed as one ``error: ...`` line on standard error with exit status 2 -- never a
-traceback.
+:func:`main` is the only place that turns exceptions into exit statuses:
+
+* user errors -- a bad input file or value (:class:`seatrack.io.table.InputError`,
+  ``ValueError`` from configuration), an output that cannot be written
+  (:class:`seatrack.io.atomic.OutputError`, any other ``OSError``), a bad command line
+  (click's usage errors) -- print one ``error: ...`` line on standard error, exit 2;
+* an interrupt prints ``error: interrupted``, exit 130;
+* anything else is a bug: one ``internal error: ...`` line asking for a report, exit 1
+  (``SEATRACK_TRACEBACK=1`` re-raises it with its traceback). Tests that drive commands
+  through :func:`main` see exit status 1, never a user-error 2, so bugs are not hidden.
+
+Numerical ``RuntimeWarning``\ s are silenced in the CLI (results with NaN are reported
+as such by the commands); ``-h`` is accepted wherever ``--help`` is.
 """
 
 from __future__ import annotations
 
 import importlib
+import os
 import sys
+import warnings
+from typing import Any
 
 import typer
 
@@ -37,6 +50,7 @@ app = typer.Typer(
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     add_completion=False,
+    context_settings={"help_option_names": ["-h", "--help"]},
 )
 
 
@@ -59,13 +73,72 @@ def _register() -> None:
 _register()
 
 
-def main() -> None:
-    """Entry point of the ``seatrack`` console script."""
+#: exceptions that are the user's to fix (printed as ``error: ...``, exit status 2)
+USER_ERRORS: tuple[type[BaseException], ...] = (InputError, OutputError, ValueError, OSError)
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def main(argv: list[str] | None = None) -> None:
+    """Entry point of the ``seatrack`` console script (always ends in ``sys.exit``)."""
+    os.environ.setdefault("PYTHONWARNINGS", "ignore::RuntimeWarning")  # worker processes
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", RuntimeWarning)
+        sys.exit(_run(argv))
+
+
+def _run(argv: list[str] | None) -> int:
     try:
-        app()
-    except (InputError, OutputError, ValueError, FileNotFoundError) as exc:
-        typer.echo(f"error: {exc}", err=True)
-        sys.exit(2)
+        code = app(args=argv, standalone_mode=False)
+    except (typer.Abort, KeyboardInterrupt):
+        typer.echo("error: interrupted", err=True)
+        return 130
+    except USER_ERRORS as exc:
+        if isinstance(exc, BrokenPipeError):
+            return 1
+        typer.echo(f"error: {_one_line(_os_message(exc))}", err=True)
+        return 2
+    except MemoryError:
+        typer.echo(
+            "error: out of memory (the input or the options ask for too much work)", err=True
+        )
+        return 2
+    except Exception as exc:
+        if _is_usage_error(exc):  # click's (typer's) command-line errors
+            return _usage(exc)
+        if os.environ.get("SEATRACK_TRACEBACK"):
+            raise
+        typer.echo(
+            f"internal error: {type(exc).__name__}: {_one_line(str(exc))} -- please report it "
+            "(SEATRACK_TRACEBACK=1 shows the traceback)",
+            err=True,
+        )
+        return 1
+    return code if isinstance(code, int) else 0
+
+
+def _is_usage_error(exc: Exception) -> bool:
+    """A click ``ClickException`` (typer vendors click in recent versions: no shared class)."""
+    return hasattr(exc, "format_message") and hasattr(exc, "exit_code")
+
+
+def _usage(exc: Any) -> int:
+    ctx = getattr(exc, "ctx", None)
+    if type(exc).__name__ == "NoArgsIsHelpError" and ctx is not None:
+        typer.echo(ctx.get_help())
+        return 2
+    hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
+    typer.echo(f"error: {_one_line(exc.format_message())}{hint}", err=True)
+    return 2
+
+
+def _os_message(exc: BaseException) -> str:
+    """``OSError`` from the standard library as ``FILE: reason``; other errors unchanged."""
+    if isinstance(exc, OSError) and not isinstance(exc, OutputError) and exc.strerror:
+        return f"{exc.filename}: {exc.strerror}" if exc.filename else exc.strerror
+    return str(exc)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -12,6 +12,7 @@ from seatrack.evaluate.bounds import (
     pcrb,
     pcrb_linear,
 )
+from seatrack.information import SingularMatrixError
 from seatrack.models.measurement import Bearing
 from seatrack.models.motion import cv_noise, cv_transition
 
@@ -196,3 +197,32 @@ def test_crb_deterministic_equals_batch_fisher_crb_per_step():
         np.testing.assert_allclose(bound[k], fisher_crb(J, W), rtol=1e-8)
     # more plots, smaller bound
     assert np.trace(bound[K][:2, :2]) < np.trace(bound[2][:2, :2])
+
+
+def test_crb_deterministic_observability_does_not_depend_on_units():
+    """The same information in metres and in kilometres (velocity in km/s): the same steps
+    are observable. The old unscaled eigenvalue test mixed m^-2 and (m/s)^-2."""
+    from seatrack.models.measurement import RangeBearing
+
+    K, dt = 6, 3.0
+    X, F, _ = _bearing_truth(K, dt)
+    H = RangeBearing(n=4, pos=(0, 1)).jacobian(X[0])
+    Ri = np.linalg.inv(np.diag([20.0**2, np.radians(0.5) ** 2]))
+    info = np.einsum("kji,jl,klm->kim", H, Ri, H)
+    T = np.diag([1e3, 1e3, 1e3, 1e3])  # x_m = T x_km: information in km is T I T
+    km = crb_deterministic(T @ info @ T, F)
+    m = crb_deterministic(info, F)
+    assert np.array_equal(np.isnan(km[:, 0, 0]), np.isnan(m[:, 0, 0]))
+    np.testing.assert_allclose(km[1:] * 1e6, m[1:], rtol=1e-8)
+
+
+def test_singular_prior_and_measurement_noise_are_named_errors():
+    F, Q = cv_transition(1.0), cv_noise(1.0, 0.1)
+    H = np.hstack([np.eye(2), np.zeros((2, 2))])
+    R = np.eye(2)
+    with pytest.raises(SingularMatrixError, match="prior covariance P0"):
+        pcrb_linear(np.diag([1.0, 1.0, 1.0, 0.0]), F, Q, H, R, n_steps=3)
+    with pytest.raises(SingularMatrixError, match="measurement covariance R"):
+        pcrb_linear(np.eye(4), F, Q, H, np.array([[1.0, 1.0], [1.0, 1.0]]), n_steps=3)
+    b = pcrb_linear(np.diag([1e4, 1e4, 100.0, 100.0]), F, Q, H, R, n_steps=3)
+    assert np.all(np.isfinite(b))

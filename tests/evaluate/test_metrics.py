@@ -75,6 +75,20 @@ def test_nees_rejects_bad_input():
         nees(np.ones(3), np.eye(2))
 
 
+def test_nees_singular_covariance_is_found_explicitly_in_any_units():
+    """An exactly singular covariance in a batch is refused by the scaled test (whatever
+    LAPACK's Cholesky would do), with its index; badly scaled units alone are no problem."""
+    from seatrack.information import SingularMatrixError
+
+    units = np.diag([1e-4, 1e5])
+    good = units @ np.array([[2.0, 1.0], [1.0, 3.0]]) @ units
+    bad = units @ np.array([[1.0, 2.0], [2.0, 4.0]]) @ units  # rank 1
+    e = np.ones((3, 2))
+    assert np.all(np.isfinite(nees(e, np.stack([good, good, good]))))
+    with pytest.raises(SingularMatrixError, match=r"index \(2,\)"):
+        nees(e, np.stack([good, good, bad]))
+
+
 @pytest.mark.parametrize(
     ("dof", "runs", "alpha"), [(1, 1, 0.05), (4, 200, 0.05), (2, 50, 0.01), (6, 1000, 0.1)]
 )

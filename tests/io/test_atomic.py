@@ -90,3 +90,44 @@ with atomic_write({str(out)!r}) as fh:
     assert "OutputError" in r.stderr or "File too large" in r.stderr
     assert out.read_text() == "previous good output\n"
     assert sorted(os.listdir(tmp_path)) == ["big.csv"]
+
+
+def test_check_output_dir(tmp_path):
+    from seatrack.io.atomic import check_output_dir
+
+    d = check_output_dir(tmp_path / "a" / "b")
+    assert d.is_dir()
+    f = tmp_path / "f"
+    f.write_text("x")
+    with pytest.raises(OutputError, match="is a file, expected a folder"):
+        check_output_dir(f)
+    with pytest.raises(OutputError, match=f"cannot create the folder {f / 'sub'}, {f} is a file"):
+        check_output_dir(f / "sub")
+    with pytest.raises(OutputError, match="not a folder name"):
+        check_output_dir("")
+
+
+def test_atomic_files_replace_all_or_none(tmp_path):
+    from seatrack.io.atomic import atomic_files
+
+    paths = [tmp_path / "a.csv", tmp_path / "b.csv"]
+    for p in paths:
+        p.write_text("old\n")
+    with pytest.raises(RuntimeError):
+        with atomic_files(paths) as tmp:
+            tmp[0].write_text("new a\n")
+            raise RuntimeError("the second file failed")
+    assert [p.read_text() for p in paths] == ["old\n", "old\n"]
+    assert sorted(os.listdir(tmp_path)) == ["a.csv", "b.csv"]
+    with atomic_files(paths) as tmp:
+        for t, text in zip(tmp, ("A\n", "B\n"), strict=True):
+            t.write_text(text)
+    assert [p.read_text() for p in paths] == ["A\n", "B\n"]
+
+
+def test_errors_about_the_temporary_name_the_destination(tmp_path):
+    out = tmp_path / "t.csv"
+    with pytest.raises(OutputError) as ei:
+        with atomic_path(out) as tmp:
+            raise ValueError(f"{tmp}: cannot write (disk full)")
+    assert str(ei.value) == f"{out}: cannot write (disk full)"

@@ -132,7 +132,7 @@ def test_clutter_file(tmp_path):
 
 
 def test_bearings_file_is_read_by_the_tma_reader(tmp_path):
-    from seatrack.tma.io import read_bearings
+    from seatrack.io.tma import read_bearings
 
     own = trajectory([0.0, 0.0], np.radians(140), 2.5, [Leg.straight(30)], dt=1.0)
     _, m = _meas(("azimuth",), (np.radians(1.5),), observer=own, p_detect=0.9)
@@ -143,3 +143,37 @@ def test_bearings_file_is_read_by_the_tma_reader(tmp_path):
     np.testing.assert_allclose(b.bearing, m.z[m.detected, 0], atol=1e-14)
     np.testing.assert_array_equal(b.observer, m.sensor_pos[m.detected, :2])
     np.testing.assert_allclose(b.sigma, np.radians(1.5))
+
+
+@pytest.mark.parametrize(
+    ("column", "value", "message"),
+    [
+        ("x_m", "1e300", "x_m = 1e300 must be in [-1e+08, 1e+08]"),
+        ("course_deg", "360", "course_deg = 360 must be in [0, 360)"),
+        ("speed_mps", "-1", "speed_mps = -1 must be in [0, 10000]"),
+        ("time_s", "1e308", "time_s = 1e308 must be in"),
+    ],
+)
+def test_truth_values_are_checked(tmp_path, column, value, message):
+    tr, _ = _meas(("azimuth",), (0.01,))
+    p = tmp_path / "truth.csv"
+    write_truth(p, tr)
+    lines = [ln.split(",") for ln in p.read_text().splitlines()]
+    lines[3][lines[0].index(column)] = value
+    p.write_text("\n".join(",".join(c) for c in lines) + "\n")
+    with pytest.raises(InputError) as exc:
+        read_truth(p)
+    assert str(exc.value) == f"{p}, line 4: {message}" or message in str(exc.value)
+    assert f"{p}, line 4: " in str(exc.value)
+
+
+def test_writers_are_atomic(tmp_path):
+    """A failure part-way through a file keeps the previous file and leaves no temporary."""
+    _, good = _meas(("azimuth", "range"), (0.01, 10.0))
+    _, no_bearing = _meas(("range",), (10.0,))
+    p = tmp_path / "bearings.csv"
+    p.write_text("previous\n")
+    with pytest.raises(ValueError, match="contact b: measurements have no bearing"):
+        write_bearings(p, [("a", good), ("b", no_bearing)], 1.0)  # rows of "a" were written
+    assert p.read_text() == "previous\n"
+    assert [x.name for x in tmp_path.iterdir()] == ["bearings.csv"]

@@ -1,7 +1,21 @@
 import numpy as np
 import pytest
 
-from seatrack.io.table import InputError, check_times, read_csv_table
+from seatrack.io.table import (
+    Check,
+    InputError,
+    angle_deg,
+    between,
+    check_times,
+    decode_text,
+    latitude,
+    longitude,
+    positive,
+    read_csv_table,
+    seconds,
+    sigma,
+    unix_seconds,
+)
 
 
 def _write(tmp_path, text, name="m.csv"):
@@ -63,3 +77,111 @@ def test_check_times_unsorted_and_duplicate(tmp_path):
 def test_missing_file(tmp_path):
     with pytest.raises(InputError, match="file not found"):
         read_csv_table(tmp_path / "nope.csv", ["a"])
+
+
+# --- encodings, separators, declared checks (issue 13) ---------------------------------
+
+
+def test_latin1_lines_fall_back_per_line_and_text_columns_keep_them(tmp_path):
+    p = tmp_path / "m.csv"
+    p.write_bytes("name,value\nJürgen,1\n".encode() + b"S\xf8ren,2\n" + "Åsa,3\n".encode())
+    t = read_csv_table(p, ["value"], ["name"], text=["name"])
+    assert t["name"].tolist() == ["Jürgen", "Søren", "Åsa"]
+    assert t.latin1_lines == (3,)
+    np.testing.assert_allclose(t["value"], [1, 2, 3])
+
+
+def test_a_latin1_byte_in_a_number_names_file_and_line(tmp_path):
+    p = tmp_path / "m.csv"
+    p.write_bytes(b"time_s,value\n0,1\n1,2\xf8\n")
+    with pytest.raises(InputError, match=r"m.csv, line 3: column value = '2\xf8' is not a number"):
+        read_csv_table(p, ["time_s", "value"])
+
+
+@pytest.mark.parametrize(
+    "raw",
+    [
+        b"\xef\xbb\xbftime_s,value\n0,1\n1,2\n",
+        b"time_s,value\r\n0,1\r\n1,2\r\n",
+        b"time_s,value\r0,1\r1,2\r",
+        b"\xef\xbb\xbftime_s,value\r\n0,1\r\n1,2\xf8x\r\n",
+    ],
+)
+def test_bom_and_line_ends(tmp_path, raw):
+    p = tmp_path / "m.csv"
+    p.write_bytes(raw)
+    if b"\xf8" in raw:
+        with pytest.raises(InputError, match="line 3: column value"):
+            read_csv_table(p, ["time_s", "value"])
+    else:
+        assert read_csv_table(p, ["time_s", "value"]).lines.tolist() == [2, 3]
+
+
+def test_decode_text_counts_lines_like_the_csv_reader():
+    text, latin1 = decode_text(b"a\r\nb\xe9\rc\n\xff\n")
+    assert text == "a\r\nbé\rc\nÿ\n" and latin1 == (2, 4)
+
+
+@pytest.mark.parametrize(("sep", "hint"), [(";", "';' as separator"), ("\t", "a tab")])
+def test_other_separators_get_a_hint(tmp_path, sep, hint):
+    p = tmp_path / "m.csv"
+    p.write_text(f"time_s{sep}value\n0{sep}1\n")
+    with pytest.raises(InputError, match=hint):
+        read_csv_table(p, ["time_s", "value"])
+
+
+def test_binary_header_is_shown_readably_and_short(tmp_path):
+    p = tmp_path / "m.csv"
+    p.write_bytes(bytes(range(256)) * 4)
+    with pytest.raises(InputError) as ei:
+        read_csv_table(p, ["time_s"])
+    msg = str(ei.value)
+    assert "missing required column(s) time_s" in msg and len(msg) < 1200 and "\n" not in msg
+
+
+def test_duplicated_column_and_directory(tmp_path):
+    p = tmp_path / "m.csv"
+    p.write_text("time_s,value,value\n0,1,2\n")
+    with pytest.raises(InputError, match="line 1: column value appears more than once"):
+        read_csv_table(p, ["time_s", "value"])
+    with pytest.raises(InputError, match="is a directory"):
+        read_csv_table(tmp_path, ["time_s"])
+
+
+def test_blank_lines_are_listed(tmp_path):
+    p = tmp_path / "m.csv"
+    p.write_text("time_s,value\n0,1\n\n , \n1,2\n")
+    t = read_csv_table(p, ["time_s", "value"])
+    assert t.blank_lines == (3, 4) and t.lines.tolist() == [2, 5] and t.n_read == 2
+
+
+@pytest.mark.parametrize(
+    ("check", "good", "bad", "message"),
+    [
+        (positive("r"), [1e-9, 1e8], [0.0, -1.0, 1.1e8], "r = {} must be in (0, 1e+08]"),
+        (angle_deg("a"), [0.0, 359.9], [360.0, -0.1], "a = {} must be in [0, 360)"),
+        (latitude("lat"), [-90.0, 90.0], [90.1], "lat = {} must be in [-90, 90]"),
+        (longitude("lon"), [-180.0, 180.0], [180.5], "lon = {} must be in [-180, 180]"),
+        (seconds("t"), [-4.1e9, 0.0, 4.1e9], [1e10, 1e308], "t = {} must be in [-4.10244e+09"),
+        (unix_seconds("t"), [0.0, 4.1e9], [-1.0, 4102444800.0], "(Unix time, 1970 to 2100)"),
+        (sigma("s"), [1e-12, 5.0], [0.0, -2.0], "s = {} must be > 0"),
+        (between("x", -1, 1, hi_open=True), [-1.0, 0.999], [1.0], "x = {} must be in [-1, 1)"),
+    ],
+)
+def test_checks_accept_and_refuse(check, good, bad, message):
+    assert all(check.problem(v) is None for v in good)
+    for v in bad:
+        assert message.format(f"{v:g}") in check.problem(v)
+    assert check.problem(float("nan")) == f"{check.column} = nan is not a finite number"
+
+
+def test_checks_in_read_raise_or_collect(tmp_path):
+    p = tmp_path / "m.csv"
+    p.write_text("time_s,range_m\n0,100\n1,-5\n2,1e308\n3,200\n")
+    checks = (seconds("time_s"), positive("range_m"))
+    with pytest.raises(InputError, match=r"m.csv, line 3: range_m = -5 must be in \(0, 1e\+08\]"):
+        read_csv_table(p, ["time_s", "range_m"], checks=checks)
+    t = read_csv_table(p, ["time_s", "range_m"], checks=checks, on_error="collect")
+    assert t.lines.tolist() == [2, 5] and [r.line for r in t.rejected] == [3, 4]
+    assert "range_m = 1e308" in t.rejected[1].reason
+    assert isinstance(checks[0], Check)

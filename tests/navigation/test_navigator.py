@@ -127,3 +127,29 @@ def test_antenna_angles_must_follow_a_constant_rotation():
 def test_bad_config():
     with pytest.raises(ValueError, match="method"):
         NavigatorConfig(method="ukf")
+
+
+def test_an_echo_log_too_long_to_step_is_refused_before_any_work():
+    from seatrack.navigation.landmarks import LandmarkMap
+    from seatrack.navigation.navigator import MAX_TICKS
+
+    cfg = NavigatorConfig()
+    dt = cfg.antenna_period / cfg.steps_per_rev
+    t_end = (MAX_TICKS + 10) * dt
+    period = cfg.antenna_period
+    t = np.array([0.0, t_end])
+    ant = np.mod(2 * np.pi * t / period, 2 * np.pi)
+    e = Echoes(t, ant, np.array([500.0, 500.0]), "E.csv", np.array([2, 3]))
+    lm = LandmarkMap.from_arrays(np.array([[100.0, 100.0]]), np.array([False]), np.zeros(1), ["A"])
+    with pytest.raises(ValueError, match=r"E.csv, line 3: the echo log spans .* at most 10000000"):
+        navigate(lm, e, np.zeros(6), cfg)
+
+
+def test_an_echo_log_shorter_than_one_cycle_is_refused():
+    from seatrack.navigation.landmarks import LandmarkMap
+
+    e = Echoes(np.array([0.0, 0.01]), np.array([0.0, 0.02]), np.array([500.0, 500.0]), "E.csv",
+               np.array([2, 3]))  # fmt: skip
+    lm = LandmarkMap.from_arrays(np.array([[100.0, 100.0]]), np.array([False]), np.zeros(1), ["A"])
+    with pytest.raises(ValueError, match=r"E.csv, line 3: .* less than one filter cycle"):
+        navigate(lm, e, np.zeros(6), NavigatorConfig())

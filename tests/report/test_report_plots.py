@@ -45,3 +45,23 @@ def test_error_figure(tmp_path):
     labels = [text.get_text() for text in ax.get_legend().get_texts()]
     assert labels == ["a", "b", "CRB", "lo"]
     assert save(fig, tmp_path / "e.png").exists()
+
+
+def test_save_is_atomic_and_refuses_bad_paths(tmp_path):
+    import pytest
+
+    from seatrack.io.atomic import OutputError
+
+    fig = error_figure(np.arange(3.0), {"a": np.ones(3)}, "y")
+    out = tmp_path / "sub" / "e.png"
+    assert save(fig, out) == out and out.read_bytes()[:4] == b"\x89PNG"
+    assert [p.name for p in out.parent.iterdir()] == ["e.png"]
+    with pytest.raises(OutputError, match="is a directory"):
+        save(fig, tmp_path / "sub")
+    (tmp_path / "f").write_text("x")
+    with pytest.raises(OutputError, match="is a file"):
+        save(fig, tmp_path / "f" / "e.png")
+    out.write_bytes(b"previous")
+    with pytest.raises(ValueError, match="not supported"):
+        save(fig, tmp_path / "sub" / "e.xyz")
+    assert sorted(p.name for p in out.parent.iterdir()) == ["e.png"]

@@ -220,7 +220,38 @@ BAD = [
             "sigma = { azimuth_deg = 0.5, range_m = 10.0 }",
             "sigma = { azimuth_deg = 0.5, range_m = -1.0 }",
         ),
-        ["sensors[0].sigma.range_m", ">= 0"],
+        ["sensors[0].sigma.range_m", "must be > 0"],
+    ),
+    (  # a zero sigma once passed here and divided by zero in `seatrack evaluate`
+        (
+            "sigma = { azimuth_deg = 0.5, range_m = 10.0 }",
+            "sigma = { azimuth_deg = 0.0, range_m = 10.0 }",
+        ),
+        ["sensors[0].sigma.azimuth_deg", "must be > 0, got 0"],
+    ),
+    (  # 1e7 s at a 1 s scan period: refused before anything is allocated
+        ("duration_s = 100.0", "duration_s = 1e7"),
+        ["sensors[0].scan_period_s", "5e+06 scans; at most 1000000"],
+    ),
+    (
+        ("scan_period_s = 2.0", "scan_period_s = 1e-6"),
+        ["scan_period_s", "at most 1000000"],
+    ),
+    (
+        ("course_deg = 90.0", "course_deg = 1e30"),
+        ["targets[0].course_deg", "implausibly large"],
+    ),
+    (
+        ("position_m = [1000.0, 2000.0]", "position_m = [1e300, 2000.0]"),
+        ["targets[0].position_m[0]", "expected a finite number of magnitude"],
+    ),
+    (
+        ("runs = 7", "runs = 7\n[evaluate.ekf]\nq = nan"),
+        ["evaluate.ekf.q", "must be finite"],
+    ),
+    (
+        ("runs = 7", "runs = 7\n[evaluate.ekf]\nq = [[1]]"),
+        ["evaluate.ekf.q", "expected a number, string or boolean"],
     ),
     (
         ("scan_period_s = 2.0", "scan_period_s = 2.0\np_detect = 1.5"),

@@ -7,7 +7,8 @@ import pytest
 
 from seatrack.geometry import knots_to_mps
 from seatrack.simulate import Leg, trajectory
-from seatrack.tma import crb, detect_legs, scenario_from_trajectories, solve
+from seatrack.simulate.tma import classic_scenario, scenario_from_trajectories
+from seatrack.tma import crb, detect_legs, solve
 
 R = math.radians
 DT = 30.0
@@ -79,8 +80,6 @@ def test_coarse_to_fine_candidate_scan(two_manoeuvre):
 
 
 def test_no_leg_change_detected_for_a_straight_target():
-    from seatrack.tma import classic_scenario
-
     sc = classic_scenario()
     rng = np.random.default_rng(23)
     found = [detect_legs(sc.bearings(rng), sigma=sc.sigma).manoeuvres.size for _ in range(10)]

@@ -8,7 +8,7 @@ from seatrack.geometry import bearing
 from seatrack.models import numerical_jacobian
 from seatrack.tma.bounds import operator_values
 from seatrack.tma.legs import leg_starts, leg_time_matrix, position_map
-from seatrack.tma.solver import bearing_residuals
+from seatrack.tma.problem import bearing_residuals
 from seatrack.tma.support import SupportValue, support_residuals, support_rows
 
 rng = np.random.default_rng(11)

@@ -3,7 +3,8 @@
 import numpy as np
 import pytest
 
-from seatrack.tma import SupportValue, TMATracker, classic_scenario, solve
+from seatrack.simulate.tma import classic_scenario
+from seatrack.tma import SupportValue, TMATracker, solve
 
 SC = classic_scenario()
 

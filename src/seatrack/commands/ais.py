@@ -129,6 +129,20 @@ def summary_lines(reports: Any, tracks: Any) -> list[str]:
     return lines
 
 
+def not_utf8(paths: Sequence[Path]) -> Exception:
+    """The error for an input that is not UTF-8: the first such file, its line and byte."""
+    from seatrack.io.table import InputError
+
+    for p in paths:
+        data = p.read_bytes()
+        try:
+            data.decode("utf-8-sig")
+        except UnicodeDecodeError as exc:
+            line = data[: exc.start].count(b"\n") + 1
+            return InputError(f"{p}, line {line}: not UTF-8 text (byte 0x{data[exc.start]:02x})")
+    return InputError(f"{', '.join(map(str, paths))}: not UTF-8 text")
+
+
 def register(app: typer.Typer) -> None:
     """Add the ``ais`` sub-command to ``app``."""
 
@@ -162,9 +176,15 @@ def register(app: typer.Typer) -> None:
         use_dask: bool = typer.Option(False, "--dask", help="one Dask task per input file"),
     ) -> None:
         """Track vessels in AIS logs: smoothed position, course, speed, turn rate, outliers."""
+        from seatrack.commands.options import option_positive, prepare_outputs
         from seatrack.filters.ais_tracker import AisTrackerConfig
         from seatrack.io.ais import write_tracks_csv
+        from seatrack.io.atomic import atomic_path
 
+        option_positive("--sigma-pos", sigma_pos, 1e4)
+        option_positive("--max-gap", max_gap, 1e9)
+        option_positive("--max-speed", max_speed, 1e4)
+        option_positive("--max-accel", max_accel, 1e3)
         cfg = AisTrackerConfig(
             sigma_pos_m=sigma_pos,
             max_gap_s=max_gap,
@@ -172,8 +192,13 @@ def register(app: typer.Typer) -> None:
             max_accel_mps2=max_accel,
             smooth=not no_smooth,
         )
-        reports, tracks = track_files(inputs, cfg, use_dask=use_dask)
-        n = write_tracks_csv(out, reports, track_columns(tracks))
+        prepare_outputs([out, geojson, html])
+        try:
+            reports, tracks = track_files(inputs, cfg, use_dask=use_dask)
+        except UnicodeDecodeError:
+            raise not_utf8(inputs) from None
+        with atomic_path(out) as tmp:
+            n = write_tracks_csv(tmp, reports, track_columns(tracks))
         lines = summary_lines(reports, tracks)
         for ln in lines:
             typer.echo(ln)
@@ -183,14 +208,16 @@ def register(app: typer.Typer) -> None:
 
             vt = map_tracks(reports, tracks)
             if geojson is not None:
-                write_geojson(geojson, vt)
+                with atomic_path(geojson) as tmp:
+                    write_geojson(tmp, vt)
                 typer.echo(f"wrote {geojson}")
             if html is not None:
-                write_html(
-                    html,
-                    vt,
-                    title=f"AIS tracks: {', '.join(p.name for p in inputs)}",
-                    summary="; ".join(lines),
-                    tile_url=tile_url,
-                )
+                with atomic_path(html) as tmp:
+                    write_html(
+                        tmp,
+                        vt,
+                        title=f"AIS tracks: {', '.join(p.name for p in inputs)}",
+                        summary="; ".join(lines),
+                        tile_url=tile_url,
+                    )
                 typer.echo(f"wrote {html}")

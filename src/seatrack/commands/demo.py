@@ -18,6 +18,8 @@ from typing import Any
 import numpy as np
 import typer
 
+from seatrack.commands.options import option_in, prepare_outputs
+
 
 def _plot_xy(meas: Any) -> np.ndarray:
     """Measured positions (m) of the detected plots of one target."""
@@ -96,14 +98,12 @@ def register(app: typer.Typer) -> None:
             None,
             "--runs",
             "-n",
-            min=1,
             help="Monte-Carlo runs of the comparison (default: the scenario's, 10).",
         ),
         processes: int = typer.Option(
             2,
             "--processes",
             "-p",
-            min=1,
             help="Worker processes for the Monte-Carlo runs (results do not depend on it).",
         ),
         progress: bool = typer.Option(
@@ -119,7 +119,8 @@ def register(app: typer.Typer) -> None:
         """
         from rich.console import Console
 
-        from seatrack.commands.simulate import write_simulation
+        from seatrack.commands.evaluate import MAX_PROCESSES
+        from seatrack.commands.simulate import simulation_files, write_simulation
         from seatrack.evaluate.metrics import chi2_interval
         from seatrack.evaluate.montecarlo import format_table, rich_table
         from seatrack.evaluate.tracking import (
@@ -132,14 +133,20 @@ def register(app: typer.Typer) -> None:
             tracking_sensor,
         )
         from seatrack.filters.registry import METHODS
+        from seatrack.io.atomic import atomic_write
         from seatrack.report.plots import error_figure, save, track_figure
-        from seatrack.simulate.scenarios import bundled_scenario, load_scenario
+        from seatrack.simulate.scenarios import MAX_RUNS, bundled_scenario, load_scenario
 
         console = Console()
         sc = load_scenario(bundled_scenario("demo"))
+        n = sc.runs if runs is None else runs
+        option_in("--runs", n, 1, MAX_RUNS)
+        option_in("--processes", processes, 1, MAX_PROCESSES)
         methods = list(METHODS)
         sensor = tracking_sensor(sc)
-        out.mkdir(parents=True, exist_ok=True)
+        pngs = [out / "tracks.png", *(out / f"errors_{name}.png" for name in sc.target_names)]
+        extra = [out / "tma.png", out / "results.txt"]
+        prepare_outputs([*simulation_files(sc, out / "data"), *pngs, *extra], [out, out / "data"])
 
         # 1. one run: data files
         rng = np.random.default_rng(np.random.SeedSequence(sc.seed).spawn(1)[0])
@@ -176,7 +183,7 @@ def register(app: typer.Typer) -> None:
             clutter=clutter_xy,
             title=f"{sc.name}: truth, {sensor.name} plots and tracks",
         )
-        pngs = [save(fig, out / "tracks.png")]
+        save(fig, pngs[0])
         for j, name in enumerate(sc.target_names):
             errs = {
                 m: np.hypot(*(rr[j].pos[:, :2] - sd.truth[j].pos[:, :2]).T)
@@ -184,10 +191,9 @@ def register(app: typer.Typer) -> None:
                 if not rr[j].error
             }
             fig = error_figure(sd.t, errs, "position error (m)", title=f"{sc.name}: target {name}")
-            pngs.append(save(fig, out / f"errors_{name}.png"))
+            save(fig, pngs[j + 1])
 
         # 3. Monte-Carlo comparison
-        n = sc.runs if runs is None else runs
         mc = compare_methods(
             sc, methods, n, sc.seed, sensor=sensor.name, processes=processes, progress=progress
         )
@@ -208,5 +214,6 @@ def register(app: typer.Typer) -> None:
         if tma_lines:
             pngs.append(out / "tma.png")
         text += tma_lines
-        (out / "results.txt").write_text("\n".join(text) + "\n")
+        with atomic_write(out / "results.txt") as fh:
+            fh.write("\n".join(text) + "\n")
         console.print(f"wrote {', '.join(str(p) for p in pngs)} and {out / 'results.txt'}")

@@ -2,10 +2,18 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import typer
+
+from seatrack.commands.options import option_in, prepare_outputs
+from seatrack.io.table import InputError
+
+#: most worker processes
+MAX_PROCESSES = 256
 
 
 def _methods(arg: str | None) -> list[str]:
@@ -20,26 +28,44 @@ def _methods(arg: str | None) -> list[str]:
     return names
 
 
+def config_error(path: str, method: str, table: Mapping[str, Any], error: str) -> InputError:
+    """A method that failed with its ``[evaluate.<method>]`` table as a scenario error.
+
+    A string where the method wants a number is named by its key (``evaluate.ekf.q =
+    'abc' is not a number``); any other failure is reported with the table's key path.
+    """
+    for k, v in table.items():
+        if isinstance(v, str) and f"to float: {v!r}" in error:
+            return InputError(f"{path}: evaluate.{method}.{k} = {v!r} is not a number")
+    return InputError(f"{path}: evaluate.{method}: {error}")
+
+
+def check_skip(skip: int, n_scans: int, sensor: str) -> None:
+    """``--skip`` must leave at least one scan to average."""
+    if not 0 <= skip < n_scans:
+        raise InputError(
+            f"--skip = {skip} must be in [0, {n_scans - 1}]: sensor {sensor} has {n_scans} scans"
+        )
+
+
 def register(app: typer.Typer) -> None:
     @app.command("evaluate")
     def evaluate(
         scenario: str = typer.Argument(..., help="Scenario TOML file or bundled scenario name."),
         runs: int | None = typer.Option(
-            None, "--runs", "-n", min=1, help="Monte-Carlo runs (default: the scenario's)."
+            None, "--runs", "-n", help="Monte-Carlo runs (default: the scenario's)."
         ),
         methods: str | None = typer.Option(
             None, "--methods", "-m", help="Comma-separated track methods (default: all registered)."
         ),
-        processes: int = typer.Option(1, "--processes", "-p", min=1, help="Worker processes."),
+        processes: int = typer.Option(1, "--processes", "-p", help="Worker processes."),
         seed: int | None = typer.Option(
             None, "--seed", help="Master seed (default: the scenario's)."
         ),
         sensor: str | None = typer.Option(
             None, "--sensor", help="Sensor to track with (default: first active)."
         ),
-        skip: int = typer.Option(
-            3, "--skip", min=0, help="Initial scans left out of the averages."
-        ),
+        skip: int = typer.Option(3, "--skip", help="Initial scans left out of the averages."),
         csv_out: Path | None = typer.Option(
             None, "--csv", help="Also write the table to this CSV file."
         ),
@@ -76,13 +102,22 @@ def register(app: typer.Typer) -> None:
             summarize,
             tracking_sensor,
         )
-        from seatrack.simulate.scenarios import load_scenario, resolve_scenario
+        from seatrack.simulate.scenarios import MAX_RUNS, load_scenario, resolve_scenario
 
         sc = load_scenario(resolve_scenario(scenario))
         names = _methods(methods)
         n = sc.runs if runs is None else runs
         s = sc.seed if seed is None else seed
-        sens = tracking_sensor(sc, sensor)
+        option_in("--runs", n, 1, MAX_RUNS)
+        option_in("--processes", processes, 1, MAX_PROCESSES)
+        option_in("--seed", s, 0, 2**63 - 1)
+        try:
+            sens = tracking_sensor(sc, sensor)
+        except ValueError as exc:
+            raise InputError(f"{'--sensor' if sensor is not None else sc.path}: {exc}") from None
+        check_skip(skip, sens.scan_times(sc.duration).size, sens.name)
+        pngs = [plots / "pos_rmse.png", plots / "anees.png"] if plots is not None else []
+        prepare_outputs([csv_out, *pngs], [plots])
         # one trial run in this process: reports why a method cannot run on this scenario
         # and compiles the numba kernels before the timed runs (not part of the statistics)
         trial = sc.simulate(np.random.default_rng(np.random.SeedSequence(s).spawn(1)[0]))
@@ -90,6 +125,8 @@ def register(app: typer.Typer) -> None:
         errors = {}
         for m, rr in run_methods(trial.sensor(sens.name), names, configs).items():
             errors[m] = next((r.error for r in rr if r.error), "")
+            if errors[m] and m in sc.extra:  # the scenario configured it: its table is wrong
+                raise config_error(sc.path, m, sc.extra[m], errors[m])
         res = compare_methods(
             sc, names, n, s, sensor=sens.name, processes=processes, progress=progress
         )
@@ -116,7 +153,9 @@ def register(app: typer.Typer) -> None:
                 f"position CRB (constant-velocity truth, no process noise): {rms:.1f} m RMS"
             )
         if csv_out is not None:
-            with csv_out.open("w", newline="") as fh:
+            from seatrack.io.atomic import atomic_write
+
+            with atomic_write(csv_out, newline="") as fh:
                 w = csv.DictWriter(fh, [c.key for c in SUMMARY_COLUMNS], extrasaction="ignore")
                 w.writeheader()
                 w.writerows(rows)
@@ -142,7 +181,7 @@ def register(app: typer.Typer) -> None:
                 bounds=bounds,
                 logy=True,
             )
-            p1 = save(fig, plots / "pos_rmse.png")
+            p1 = save(fig, pngs[0])
             fig = error_figure(
                 t,
                 {m: 0.5 * (hist[m]["anees_x"] + hist[m]["anees_y"]) for m in ok},
@@ -152,5 +191,5 @@ def register(app: typer.Typer) -> None:
                 hlines={f"95% bounds of one axis ({n} runs)": lo, "_upper": hi},
                 logy=True,
             )
-            p2 = save(fig, plots / "anees.png")
+            p2 = save(fig, pngs[1])
             console.print(f"wrote {p1} and {p2}")

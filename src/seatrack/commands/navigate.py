@@ -9,7 +9,7 @@ mapped landmarks (JP H03-66630, spec ``landmark_nav.md``).
 (with the matching ``--gyro`` and ``--start``; a single ``--start`` serves all); the map
 is corrected from the passages and written.
 
-File formats: see :mod:`seatrack.navigation.files` and :mod:`seatrack.navigation.landmarks`.
+File formats: see :mod:`seatrack.navigation.files` and :mod:`seatrack.io.landmarks`.
 """
 
 from __future__ import annotations
@@ -20,12 +20,25 @@ from typing import Any
 
 import typer
 
-from seatrack.io.table import InputError
+from seatrack.commands.options import option_in, option_positive, prepare_outputs
+from seatrack.io.table import MAX_DISTANCE_M, InputError
+
+#: largest own-ship speed accepted in --start, m/s (about 200 kn)
+MAX_START_SPEED_MPS = 100.0
+#: largest antenna offset from the reference point, m
+MAX_ANTENNA_OFFSET_M = 1000.0
 
 
 def parse_start(text: str) -> list[float]:
     """``"x_m,y_m,heading_deg,speed_mps"`` -> initial state ``[X, Y, alpha, Xdot, Ydot, 0]``
-    (velocity along the heading)."""
+    (velocity along the heading).
+
+    Raises
+    ------
+    InputError
+        Not four numbers, or a value out of range (``|x|, |y| <= 1e8`` m, heading in
+        [-360, 720] deg, ``|speed| <=`` :data:`MAX_START_SPEED_MPS`).
+    """
     parts = [p.strip() for p in text.split(",")]
     try:
         vals = [float(p) for p in parts]
@@ -36,6 +49,10 @@ def parse_start(text: str) -> list[float]:
             f"--start must be 'x_m,y_m,heading_deg,speed_mps' (4 numbers), got {text!r}"
         )
     x, y, hd, v = vals
+    option_in("--start x_m", x, -MAX_DISTANCE_M, MAX_DISTANCE_M)
+    option_in("--start y_m", y, -MAX_DISTANCE_M, MAX_DISTANCE_M)
+    option_in("--start heading_deg", hd, -360.0, 720.0)
+    option_in("--start speed_mps", v, -MAX_START_SPEED_MPS, MAX_START_SPEED_MPS)
     a = math.radians(hd)
     return [x, y, a, v * math.sin(a), v * math.cos(a), 0.0]
 
@@ -45,8 +62,10 @@ def _config(period: float, range_limit: float, offset: float, method: str, clutt
 
     from seatrack.navigation.navigator import NavigatorConfig
 
-    if not (period > 0 and range_limit > 0 and clutter > 0):
-        raise InputError("--antenna-period, --range-limit and --clutter-density must be positive")
+    option_positive("--antenna-period", period, 3600.0)
+    option_positive("--range-limit", range_limit, MAX_DISTANCE_M)
+    option_in("--antenna-offset", offset, -MAX_ANTENNA_OFFSET_M, MAX_ANTENNA_OFFSET_M)
+    option_positive("--clutter-density", clutter, 1.0)
     if method not in ("ekf", "srif"):
         raise InputError(f"--method must be 'ekf' or 'srif', got {method!r}")
     cfg = NavigatorConfig(
@@ -62,6 +81,8 @@ def _origin(text: str | None) -> tuple[float, float] | None:
         lat, lon = (float(v) for v in text.split(","))
     except ValueError:
         raise InputError(f"--origin must be 'lat_deg,lon_deg', got {text!r}") from None
+    option_in("--origin lat_deg", lat, -90.0, 90.0)
+    option_in("--origin lon_deg", lon, -180.0, 180.0)
     return lat, lon
 
 
@@ -107,7 +128,9 @@ def register(app: typer.Typer) -> None:
 
         cfg = _config(antenna_period, range_limit, antenna_offset, method, clutter_density)
         x0 = parse_start(start)
-        lm = read_map_csv(map_file, _origin(origin))
+        org = _origin(origin)
+        prepare_outputs([out])
+        lm = read_map_csv(map_file, org)
         ech = read_echoes(echoes)
         gy = read_gyro(gyro) if gyro is not None else None
         res = navigate(lm, ech, x0, cfg, gyro=gy)
@@ -150,6 +173,9 @@ def register(app: typer.Typer) -> None:
         from seatrack.navigation.survey import SurveyConfig, survey
 
         cfg = _config(antenna_period, range_limit, antenna_offset, method, clutter_density)
+        option_in("--min-visibility", min_visibility, 0.0, 1.0)
+        x0s = [parse_start(s) for s in start]
+        org = _origin(origin)
         gy = list(gyro or [])
         if gy and len(gy) != len(echoes):
             raise InputError(f"give one --gyro per --echoes ({len(echoes)}), got {len(gy)}")
@@ -157,10 +183,11 @@ def register(app: typer.Typer) -> None:
             raise InputError(
                 f"give one --start, or one per --echoes ({len(echoes)}), got {len(start)}"
             )
-        lm = read_map_csv(map_file, _origin(origin))
+        prepare_outputs([out])
+        lm = read_map_csv(map_file, org)
         runs = []
         for i, e in enumerate(echoes):
-            x0 = parse_start(start[i if len(start) > 1 else 0])
+            x0 = x0s[i if len(start) > 1 else 0]
             runs.append(
                 navigate(lm, read_echoes(e), x0, cfg, gyro=read_gyro(gy[i]) if gy else None)
             )

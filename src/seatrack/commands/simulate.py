@@ -8,42 +8,66 @@ from typing import Any
 import numpy as np
 import typer
 
+from seatrack.commands.options import option_in, prepare_outputs
+
+
+def simulation_files(scenario: Any, out: Path) -> list[Path]:
+    """The files :func:`write_simulation` writes for ``scenario`` into folder ``out``.
+
+    ``plots_<sensor>.csv`` (PLOTS format, one track per target) for each active sensor,
+    ``clutter_<sensor>.csv`` for each active sensor with a clutter density (possibly with
+    no rows), ``bearings_<sensor>.csv`` for each passive sonar, ``truth.csv`` (all
+    targets at the truth interval) and ``ownship.csv``.
+    """
+    files = []
+    for s in scenario.sensors:
+        if s.is_passive:
+            files.append(out / f"bearings_{s.name}.csv")
+        else:
+            files.append(out / f"plots_{s.name}.csv")
+            if s.clutter_density > 0:
+                files.append(out / f"clutter_{s.name}.csv")
+    return [*files, out / "truth.csv", out / "ownship.csv"]
+
 
 def write_simulation(sim: Any, out: Path) -> list[tuple[Path, int]]:
     """Write one :class:`~seatrack.simulate.scenarios.SimulationResult` to ``out``.
 
-    Files: ``plots_<sensor>.csv`` (PLOTS format, one track per target) for each active
-    sensor, ``clutter_<sensor>.csv`` when it has false plots, ``bearings_<sensor>.csv``
-    for each passive sonar, ``truth.csv`` (all targets at the truth interval) and
-    ``ownship.csv``. Returns (path, rows) for each file.
+    The files of :func:`simulation_files` are written together: if one fails, none of
+    them replaces its previous version (:func:`seatrack.io.atomic.atomic_files`).
+    Returns (path, rows) for each file.
     """
+    from seatrack.io.atomic import atomic_files
     from seatrack.io.measurements_csv import write_bearings, write_clutter, write_plots, write_truth
 
-    out.mkdir(parents=True, exist_ok=True)
+    paths = simulation_files(sim.scenario, out)
+    prepare_outputs(paths, [out])
     names = sim.scenario.target_names
-    written: list[tuple[Path, int]] = []
-    for sd in sim.sensors:
-        s = sd.sensor
-        if s.is_passive:
-            p = out / f"bearings_{s.name}.csv"
-            sigma_deg = float(np.degrees(s.sigma[0]))
-            written.append(
-                (p, write_bearings(p, zip(names, sd.measurements, strict=True), sigma_deg))
-            )
-        else:
-            p = out / f"plots_{s.name}.csv"
-            written.append((p, write_plots(p, zip(names, sd.measurements, strict=True))))
-            if sd.clutter_t.size:
-                p = out / f"clutter_{s.name}.csv"
-                n = write_clutter(
-                    p, sd.clutter_t, sd.clutter_range, sd.clutter_azimuth, sd.clutter_sensor
-                )
-                written.append((p, n))
-    p = out / "truth.csv"
-    written.append((p, write_truth(p, list(zip(names, sim.targets, strict=True)))))
-    p = out / "ownship.csv"
-    written.append((p, write_truth(p, sim.ownship)))
-    return written
+    rows: list[int] = []
+    with atomic_files(paths) as tmp:
+        it = iter(tmp)
+        for sd in sim.sensors:
+            s = sd.sensor
+            meas = zip(names, sd.measurements, strict=True)
+            if s.is_passive:
+                rows.append(write_bearings(next(it), meas, float(np.degrees(s.sigma[0]))))
+                continue
+            rows.append(write_plots(next(it), meas))
+            if s.clutter_density > 0:
+                args = (sd.clutter_t, sd.clutter_range, sd.clutter_azimuth, sd.clutter_sensor)
+                rows.append(write_clutter(next(it), *args))
+        rows.append(write_truth(next(it), list(zip(names, sim.targets, strict=True))))
+        rows.append(write_truth(next(it), sim.ownship))
+    return list(zip(paths, rows, strict=True))
+
+
+def seeded_rng(seed: int, run: int) -> np.random.Generator:
+    """The generator of Monte-Carlo run ``run`` under master seed ``seed`` (as in evaluate)."""
+    from seatrack.simulate.scenarios import MAX_RUNS
+
+    option_in("--seed", seed, 0, 2**63 - 1)
+    option_in("--run", run, 0, MAX_RUNS - 1)
+    return np.random.default_rng(np.random.SeedSequence(seed).spawn(run + 1)[run])
 
 
 def register(app: typer.Typer) -> None:
@@ -60,7 +84,6 @@ def register(app: typer.Typer) -> None:
         run: int = typer.Option(
             0,
             "--run",
-            min=0,
             help="Monte-Carlo run index: reproduces run RUN of `seatrack evaluate`.",
         ),
     ) -> None:
@@ -73,8 +96,8 @@ def register(app: typer.Typer) -> None:
         from seatrack.simulate.scenarios import load_scenario, resolve_scenario
 
         sc = load_scenario(resolve_scenario(scenario))
-        s = sc.seed if seed is None else seed
-        rng = np.random.default_rng(np.random.SeedSequence(s).spawn(run + 1)[run])
+        rng = seeded_rng(sc.seed if seed is None else seed, run)
+        prepare_outputs(simulation_files(sc, out), [out])
         sim = sc.simulate(rng)
         for path, n in write_simulation(sim, out):
             typer.echo(f"wrote {path} ({n} rows)")

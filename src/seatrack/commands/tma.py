@@ -1,19 +1,24 @@
 """``seatrack tma BEARINGS.csv``: bearings-only target motion analysis of every contact.
 
-Formats: see :mod:`seatrack.tma.io`. Without ``--manoeuvres`` the target leg changes are
-detected from the bearing residuals (``--no-detect`` fits one leg). Without ``--out`` the
-RESULT.json object is printed to standard output.
-"""
+Formats: see :mod:`seatrack.io.tma` and ``docs/formats.md``. Without ``--manoeuvres`` the
+target leg changes are detected from the bearing residuals (``--no-detect`` fits one leg).
+Without ``--out`` the RESULT.json object is printed to standard output. Output paths are
+checked before any work and written atomically; RESULT.json is always valid JSON (``null``
+for undetermined values)."""
 
 from __future__ import annotations
 
-import json
 import math
+from collections.abc import Mapping
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import typer
 
 from seatrack.io.table import InputError
+
+if TYPE_CHECKING:
+    from seatrack.tma import Bearings
 
 
 def _parse_times(text: str | None) -> list[float] | None:
@@ -36,6 +41,23 @@ def _parse_times(text: str | None) -> list[float] | None:
     if any(b <= a for a, b in zip(out, out[1:], strict=False)):
         raise InputError(f"--manoeuvres: times must be strictly increasing, got {text}")
     return out
+
+
+def _check_manoeuvres(times: list[float], contacts: Mapping[str, Bearings]) -> None:
+    """Every given leg change must fall strictly inside every contact's bearings."""
+    if not times:
+        return
+    for cid, b in contacts.items():
+        if times[0] <= b.t[0]:
+            raise InputError(
+                f"--manoeuvres: {times[0]:g} s is not after the first bearing of "
+                f"contact {cid} ({b.t[0]:g} s)"
+            )
+        if times[-1] >= b.t[-1]:
+            raise InputError(
+                f"--manoeuvres: {times[-1]:g} s is not before the last bearing of "
+                f"contact {cid} ({b.t[-1]:g} s); a leg needs bearings"
+            )
 
 
 def register(app: typer.Typer) -> None:
@@ -72,11 +94,19 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Bearings-only TMA (DE 3446658): position, course and speed of every contact with
         1-sigma / 95 % values, support values, multi-leg targets and an observability check."""
-        from seatrack.tma.io import read_bearings, read_support, solution_to_dict
-        from seatrack.tma.solver import TMAConfig, solve_many
+        from seatrack.io.atomic import atomic_write, check_output_path
+        from seatrack.io.tma import read_bearings, read_support, result_json, solution_summary
+        from seatrack.tma import TMAConfig, solve_many
 
-        if not (sigma_deg > 0 and math.isfinite(sigma_deg)):
-            raise InputError(f"--sigma-deg must be a positive number of degrees, got {sigma_deg}")
+        if not (math.isfinite(sigma_deg) and 0 < sigma_deg < 180):
+            raise InputError(
+                f"--sigma-deg must be a number of degrees in (0, 180), got {sigma_deg}"
+            )
+        if out is not None and plot is not None and out.resolve() == plot.resolve():
+            raise InputError(f"--out and --plot name the same file {out}")
+        for path in (out, plot):
+            if path is not None:
+                check_output_path(path)  # before any work
         sigma = math.radians(sigma_deg)
         contacts = read_bearings(bearings, default_sigma=sigma)
         sup = read_support(support) if support is not None else {}
@@ -86,43 +116,25 @@ def register(app: typer.Typer) -> None:
                 f"{support}: support values for contact(s) {', '.join(unknown)} not in {bearings}"
             )
         times = _parse_times(manoeuvres)
-        man: list[float] | str | None
         if times is not None:
-            man = times
-            for cid, b in contacts.items():
-                if times and times[0] <= b.t[0]:
-                    raise InputError(
-                        f"--manoeuvres: {times[0]:g} s is not after the first bearing of "
-                        f"contact {cid} ({b.t[0]:g} s)"
-                    )
-        else:
-            man = None if no_detect else "auto"
+            _check_manoeuvres(times, contacts)
+        man: list[float] | str | None = (
+            times if times is not None else (None if no_detect else "auto")
+        )
         sols = solve_many(contacts, sup, man, sigma=sigma, config=TMAConfig(sigma=sigma))
-        result = {cid: solution_to_dict(s) for cid, s in sols.items()}
-        text = json.dumps(result, indent=2)
+        text = result_json(sols)
         if out is not None:
-            out.write_text(text + "\n")
+            with atomic_write(out) as fh:
+                fh.write(text)
             for cid, s in sols.items():
-                L = s.last
-                if s.observable:
-                    state = "converged" if s.converged else "NOT converged"
-                    typer.echo(
-                        f"contact {cid}: range {L.range:.0f} +/- {L.sigma_range:.0f} m, "
-                        f"bearing {math.degrees(L.bearing):.1f} deg, "
-                        f"course {math.degrees(L.course):.1f} +/- "
-                        f"{math.degrees(L.sigma_course):.1f} deg, "
-                        f"speed {L.speed:.2f} +/- {L.sigma_speed:.2f} m/s "
-                        f"({s.iterations} iterations, {state})"
-                    )
-                else:
-                    typer.echo(f"contact {cid}: NOT OBSERVABLE")
+                typer.echo(solution_summary(cid, s))
                 for w in s.warnings:
                     typer.echo(f"  warning: {w}")
             typer.echo(f"wrote {out}")
         else:
-            typer.echo(text)
+            typer.echo(text, nl=False)
         if plot is not None:
-            from seatrack.tma.plot import plot_solutions
+            from seatrack.report.tma import plot_solutions
 
             plot_solutions(contacts, sols, plot)
             if out is not None:

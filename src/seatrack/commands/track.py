@@ -93,13 +93,13 @@ def register(app: typer.Typer) -> None:
         out: Path = typer.Option(..., "--out", "-o", help="TRACK.csv to write (one row per plot)"),
     ) -> None:
         """Run a tracking filter over recorded radar/sonar plots."""
+        from seatrack.commands.options import prepare_outputs
         from seatrack.config import load_toml
         from seatrack.filters.registry import method_class, run
-        from seatrack.io.atomic import check_output_path
         from seatrack.io.plots import read_plots
 
         method_class(method)  # unknown method: fail before any work
-        check_output_path(out)
+        prepare_outputs([out])
         table = load_toml(config) if config is not None else {}
         plots = read_plots(plots_csv)
         cols = run(method, plots, table, source=str(config) if config else "config")

@@ -13,6 +13,11 @@ Conventions: the state of step ``k`` is ``x_k``; the dynamics are
 ``x_{k+1} = f_k(x_k) + w_k``, ``w_k ~ N(0, Q_k)``; the measurement of step ``k`` is
 ``z_k = h_k(x_k) + v_k``, ``v_k ~ N(0, R_k)``. Bounds are returned as covariances
 (inverse information matrices), shape ``(K + 1, n, n)`` for steps ``0..K``.
+
+Every inverse (information matrices, covariances ``P0``, ``Q``, ``R``) is preceded by the
+explicit scale-invariant rank test of :mod:`seatrack.information`; a singular matrix raises
+:class:`~seatrack.information.SingularMatrixError` (a ``numpy.linalg.LinAlgError``) naming the
+matrix and the step, whatever the BLAS build would have done.
 """
 
 from __future__ import annotations
@@ -21,10 +26,24 @@ from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
-import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ["fisher_information", "fisher_crb", "pcrb_linear", "pcrb", "crb_deterministic"]
+from seatrack.information import (
+    SingularMatrixError,
+    check_information,
+    fisher_information,
+    invert_information,
+    invert_jacobian_information,
+)
+
+__all__ = [
+    "SingularMatrixError",
+    "crb_deterministic",
+    "fisher_crb",
+    "fisher_information",
+    "pcrb",
+    "pcrb_linear",
+]
 
 FloatArray = NDArray[np.float64]
 
@@ -34,54 +53,10 @@ def _f(a: ArrayLike) -> FloatArray:
 
 
 def _spd_inverse(M: FloatArray, what: str) -> FloatArray:
-    """Inverse of a symmetric positive-definite matrix via Cholesky (clear error if not PD)."""
-    M = 0.5 * (M + M.T)
-    try:
-        c = scipy.linalg.cho_factor(M, lower=True)
-    except np.linalg.LinAlgError as exc:
-        w = np.linalg.eigvalsh(M)
-        raise np.linalg.LinAlgError(
-            f"{what} is singular or not positive definite (smallest eigenvalue {w[0]:.3g}, "
-            f"largest {w[-1]:.3g}): the state is not observable from these data"
-        ) from exc
-    inv = scipy.linalg.cho_solve(c, np.eye(M.shape[0]))
-    return 0.5 * (inv + inv.T)
-
-
-def _weight(W: ArrayLike, m: int) -> FloatArray:
-    w = _f(W)
-    if w.ndim == 0:
-        return np.eye(m) * float(w)
-    if w.ndim == 1:
-        if w.size != m:
-            raise ValueError(f"weight vector has {w.size} entries for {m} measurements")
-        return np.diag(w)
-    if w.shape != (m, m):
-        raise ValueError(f"weight matrix shape {w.shape} does not match {m} measurements")
-    return w
-
-
-def fisher_information(J: ArrayLike, W: ArrayLike) -> FloatArray:
-    """Fisher information ``J^T W J`` of Gaussian measurements.
-
-    Parameters
-    ----------
-    J : array_like, shape (m, n)
-        Jacobian of the ``m`` noise-free measurements with respect to the ``n`` parameters,
-        evaluated at the true parameter.
-    W : array_like, scalar, (m,) or (m, m)
-        Inverse measurement covariance ``R^-1`` (a vector is a diagonal; e.g.
-        ``1 / sigma**2``).
-
-    Returns
-    -------
-    ndarray, shape (n, n)
-    """
-    Jm = _f(J)
-    if Jm.ndim != 2:
-        raise ValueError(f"J must be 2-D (m, n), got shape {Jm.shape}")
-    F = Jm.T @ _weight(W, Jm.shape[0]) @ Jm
-    return 0.5 * (F + F.T)
+    """Inverse of a symmetric positive-definite matrix after the explicit scaled rank test
+    of :func:`seatrack.information.invert_information` (raises
+    :class:`~seatrack.information.SingularMatrixError` naming ``what``)."""
+    return invert_information(M, what)
 
 
 def fisher_crb(J: ArrayLike, W: ArrayLike) -> FloatArray:
@@ -101,11 +76,14 @@ def fisher_crb(J: ArrayLike, W: ArrayLike) -> FloatArray:
 
     Raises
     ------
-    numpy.linalg.LinAlgError
-        If the Fisher information is singular (the parameters are not observable, e.g.
-        bearings-only TMA without an own-ship manoeuvre).
+    seatrack.information.SingularMatrixError
+        (a :class:`numpy.linalg.LinAlgError`) if the whitened Jacobian ``W^1/2 J`` is
+        rank-deficient by the explicit scaled test (the parameters are not observable, e.g.
+        bearings-only TMA without an own-ship manoeuvre). The inverse is computed from the
+        SVD of the column-scaled whitened Jacobian, never by hoping LAPACK notices a singular
+        matrix.
     """
-    return _spd_inverse(fisher_information(J, W), "Fisher information matrix")
+    return invert_jacobian_information(J, W, "Fisher information matrix")
 
 
 def _per_step(value: Any, K: int, name: str, allow_none: bool = False) -> list[Any]:
@@ -159,9 +137,7 @@ def _measurement_info(H: FloatArray | None, R: FloatArray | None) -> FloatArray 
     if R is None:
         raise ValueError("R is missing for a step that has H")
     Hm = np.atleast_2d(H)
-    Rm = np.atleast_2d(R)
-    c = scipy.linalg.cho_factor(0.5 * (Rm + Rm.T), lower=True)
-    info = Hm.T @ scipy.linalg.cho_solve(c, Hm)
+    info = Hm.T @ invert_information(np.atleast_2d(R), "measurement covariance R") @ Hm
     return 0.5 * (info + info.T)
 
 
@@ -331,7 +307,7 @@ def pcrb(
 def crb_deterministic(
     info: ArrayLike | Sequence[ArrayLike],
     F: ArrayLike | Sequence[ArrayLike],
-    rcond: float = 1e-12,
+    rcond: float | None = None,
 ) -> FloatArray:
     """Filtering CRB of a deterministic (noise-free) trajectory without prior information.
 
@@ -351,9 +327,11 @@ def crb_deterministic(
         detection probability for missed detections without clutter).
     F : (n, n) or (K, n, n)
         Invertible transition matrices.
-    rcond : float
-        ``J_k`` counts as singular when its smallest eigenvalue is below ``rcond`` times
-        its largest.
+    rcond : float, optional
+        ``J_k`` counts as singular (not yet observable) when the smallest eigenvalue of
+        ``J_k`` scaled to unit diagonal is at most ``rcond`` times its largest (default
+        :func:`seatrack.information.information_rtol`, ``100 n eps``); the test is
+        scale-invariant (units of position and velocity do not matter).
 
     Returns
     -------
@@ -367,11 +345,10 @@ def crb_deterministic(
     J = 0.5 * (I[0] + I[0].T)
     for k in range(K1):
         if k > 0:
-            Fi = np.linalg.inv(Fs[k - 1])
+            Fi = np.linalg.solve(Fs[k - 1], np.eye(n))  # transition: invertible by contract
             J = Fi.T @ J @ Fi + I[k]
             J = 0.5 * (J + J.T)
-        w = np.linalg.eigvalsh(J)
-        if w[0] <= rcond * w[-1]:
+        if not check_information(J, rcond).full_rank:
             continue  # not yet observable
         out[k] = _spd_inverse(J, "information")
     return out

@@ -23,6 +23,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
+from seatrack.information import SingularMatrixError, positive_definite_mask
+
 __all__ = [
     "rmse",
     "rms_over_time",
@@ -124,10 +126,14 @@ def peak_error(err_norm: ArrayLike, skip: int = 0) -> float:
 def _quadratic_form(v: FloatArray, M: FloatArray) -> FloatArray:
     """``v^T M^-1 v`` for ``v (..., n)``, ``M (..., n, n)`` symmetric PD, via Cholesky.
 
+    Every ``M`` first passes the explicit scale-invariant test of
+    :func:`seatrack.information.positive_definite_mask` (not left to LAPACK).
+
     Raises
     ------
-    numpy.linalg.LinAlgError
-        If some ``M`` is not positive definite.
+    seatrack.information.SingularMatrixError
+        (a ``numpy.linalg.LinAlgError``) if some ``M`` is singular or not positive definite;
+        the message gives the index of the first.
     """
     if v.shape[-1] != M.shape[-1] or M.shape[-1] != M.shape[-2]:
         raise ValueError(f"shape mismatch: vector {v.shape} vs matrix {M.shape}")
@@ -135,6 +141,13 @@ def _quadratic_form(v: FloatArray, M: FloatArray) -> FloatArray:
     n = v.shape[-1]
     vb = np.broadcast_to(v, (*shape, n))
     Mb = np.broadcast_to(M, (*shape, n, n))
+    ok = positive_definite_mask(Mb)
+    if not np.all(ok):
+        idx = tuple(int(i) for i in np.argwhere(~ok)[0])
+        raise SingularMatrixError(
+            f"covariance at index {idx} is singular or not positive definite to working "
+            "precision (scaled eigenvalue test)"
+        )
     L = np.linalg.cholesky(Mb)
     # Solve L w = v; then v^T M^-1 v = |w|^2. Batched triangular solve via np.linalg.solve
     # (general solve on a triangular matrix is exact up to rounding, and broadcasts).

@@ -9,9 +9,11 @@ a half-written file.
 * :func:`atomic_write` -- a context manager yielding an open file object (text or binary);
 * :func:`atomic_path` -- a context manager yielding a temporary *path*, for libraries that
   write to a file name themselves (matplotlib, pyarrow);
-* :func:`check_output_path` -- the one check every command runs on an output path before
-  doing any work, so a bad path fails fast with :class:`OutputError` and nothing is computed
-  in vain.
+* :func:`atomic_files` -- several files that are replaced together at the end (a failure
+  while writing any of them keeps all the previous files);
+* :func:`check_output_path` / :func:`check_output_dir` -- the one check every command runs
+  on an output file / folder before doing any work, so a bad path fails fast with
+  :class:`OutputError` and nothing is computed in vain.
 
 Output folders are created when missing (like ``mkdir -p``); a path that is a directory,
 or whose parent is a file, or a folder that is not writable is refused with a clear message.
@@ -26,15 +28,59 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO, Any
 
-__all__ = ["OutputError", "atomic_path", "atomic_write", "check_output_path"]
+__all__ = [
+    "OutputError",
+    "atomic_path",
+    "atomic_write",
+    "check_output_dir",
+    "check_output_path",
+    "atomic_files",
+]
 
 
 class OutputError(OSError):
     """An output file cannot be written; the message names the file and the reason."""
 
 
+def _folder_problem(p: Path, create: bool) -> str | None:
+    """Why folder ``p`` cannot hold outputs (creating it when ``create``), or None."""
+    if p.exists() and not p.is_dir():
+        return f"{p} is a file, expected a folder"
+    for anc in p.parents:
+        if anc.exists():
+            if not anc.is_dir():
+                return f"cannot create the folder {p}, {anc} is a file"
+            break
+    if create:
+        try:
+            p.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            return f"cannot create the folder {p} ({exc.strerror})"
+    if p.exists() and not os.access(p, os.W_OK | os.X_OK):
+        return f"folder {p} is not writable"
+    return None
+
+
+def check_output_dir(path: str | os.PathLike[str], *, create: bool = True) -> Path:
+    """Validate an output folder (create it, like ``mkdir -p``); return it as a :class:`Path`.
+
+    Raises
+    ------
+    OutputError
+        When the path is a file, a parent is a file, the folder cannot be created, or it
+        is not writable.
+    """
+    if str(path) == "":
+        raise OutputError("an empty string is not a folder name")
+    p = Path(path)
+    problem = _folder_problem(p, create)
+    if problem is not None:
+        raise OutputError(f"{p}: {problem}")
+    return p
+
+
 def check_output_path(path: str | os.PathLike[str], *, create_parent: bool = True) -> Path:
-    """Validate an output path (and create its folder); return it as a :class:`Path`.
+    """Validate an output file path (and create its folder); return it as a :class:`Path`.
 
     Raises
     ------
@@ -44,22 +90,12 @@ def check_output_path(path: str | os.PathLike[str], *, create_parent: bool = Tru
     """
     p = Path(path)
     if str(path) == "" or p.name in ("", ".", ".."):
-        raise OutputError(f"{path}: not a file name")
+        raise OutputError(f"{path!s}: not a file name")
     if p.is_dir():
         raise OutputError(f"{p}: is a directory, expected a file name")
-    parent = p.parent
-    for anc in [parent, *parent.parents]:
-        if anc.exists():
-            if not anc.is_dir():
-                raise OutputError(f"{p}: cannot create the output folder, {anc} is a file")
-            break
-    if create_parent:
-        try:
-            parent.mkdir(parents=True, exist_ok=True)
-        except OSError as exc:
-            raise OutputError(f"{p}: cannot create the output folder ({exc.strerror})") from None
-    if parent.exists() and not os.access(parent, os.W_OK | os.X_OK):
-        raise OutputError(f"{p}: folder {parent} is not writable")
+    problem = _folder_problem(p.parent, create_parent)
+    if problem is not None:
+        raise OutputError(f"{p}: {problem}")
     if p.exists() and not os.access(p, os.W_OK):
         raise OutputError(f"{p}: file is not writable")
     return p
@@ -93,6 +129,8 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
     except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp_path.unlink()
+        if isinstance(exc, Exception) and str(tmp_path) in str(exc):  # name the destination
+            raise OutputError(str(exc).replace(str(tmp_path), str(dest))) from None
         if isinstance(exc, OSError) and not isinstance(exc, OutputError):
             raise OutputError(f"{dest}: write failed ({exc.strerror or exc})") from None
         raise
@@ -128,3 +166,15 @@ def atomic_write(
         else:
             with open(tmp, "w", encoding=encoding, newline=newline) as fh:
                 yield fh
+
+
+@contextlib.contextmanager
+def atomic_files(paths: list[Path]) -> Iterator[list[Path]]:
+    """Temporary paths for several output files, replacing all of them on success.
+
+    A failure while the files are written (inside the ``with`` block) removes every
+    temporary and keeps every previous file; the replacements themselves run one after
+    the other at the end.
+    """
+    with contextlib.ExitStack() as stack:
+        yield [stack.enter_context(atomic_path(p)) for p in paths]

@@ -33,13 +33,15 @@ landmarks are named by their order number.
 
 from __future__ import annotations
 
+import csv
 import struct
 from pathlib import Path
 
 import numpy as np
 
 from seatrack.geometry import geodetic_to_enu
-from seatrack.io.table import InputError, read_csv_table
+from seatrack.io.atomic import atomic_write
+from seatrack.io.table import InputError, coordinate, latitude, longitude, read_csv_table
 from seatrack.navigation.landmarks import LandmarkMap
 
 __all__ = ["read_map_csv", "write_map_csv", "encode_records", "decode_records"]
@@ -70,6 +72,7 @@ def read_map_csv(path: str | Path, origin: tuple[float, float] | None = None) ->
         required=["id", "kind"],
         optional=["x_m", "y_m", "orientation_deg", "lat_deg", "lon_deg"],
         text=["id", "kind"],
+        checks=(coordinate("x_m"), coordinate("y_m"), latitude("lat_deg"), longitude("lon_deg")),
     )
     n = len(t)
     nan = np.full(n, np.nan)
@@ -120,13 +123,18 @@ def read_map_csv(path: str | Path, origin: tuple[float, float] | None = None) ->
 
 
 def write_map_csv(lm: LandmarkMap, path: str | Path) -> None:
-    """Write ``id, kind, x_m, y_m, orientation_deg`` (3 decimals for metres and degrees)."""
-    lines = ["id,kind,x_m,y_m,orientation_deg"]
-    for i in range(len(lm)):
-        kind = "contour" if lm.is_contour[i] else "point"
-        ori = f"{np.degrees(lm.orientation[i]):.3f}" if lm.is_contour[i] else ""
-        lines.append(f"{lm.ids[i]},{kind},{lm.xy[i, 0]:.3f},{lm.xy[i, 1]:.3f},{ori}")
-    Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
+    """Write ``id, kind, x_m, y_m, orientation_deg`` (3 decimals for metres and degrees).
+
+    Written atomically (:func:`seatrack.io.atomic.atomic_write`); ids are CSV-quoted when
+    they need it.
+    """
+    with atomic_write(path, newline="") as fh:
+        w = csv.writer(fh, lineterminator="\n")
+        w.writerow(["id", "kind", "x_m", "y_m", "orientation_deg"])
+        for i in range(len(lm)):
+            kind = "contour" if lm.is_contour[i] else "point"
+            ori = f"{np.degrees(lm.orientation[i]):.3f}" if lm.is_contour[i] else ""
+            w.writerow([lm.ids[i], kind, f"{lm.xy[i, 0]:.3f}", f"{lm.xy[i, 1]:.3f}", ori])
 
 
 def encode_records(

@@ -23,7 +23,15 @@ from numpy.typing import NDArray
 
 from seatrack.filters.base import Plots
 from seatrack.geometry import bearing_rad_to_deg
-from seatrack.io.table import InputError, read_csv_table
+from seatrack.io.atomic import atomic_write
+from seatrack.io.table import (
+    InputError,
+    angle_deg,
+    between,
+    coordinate,
+    read_csv_table,
+    seconds,
+)
 from seatrack.simulate.sensors import Measurements
 from seatrack.simulate.trajectories import Trajectory
 
@@ -53,6 +61,12 @@ TRUTH_COLUMNS = (
     "speed_mps",
     "turn_rate_dps",
 )
+
+
+#: largest speed (m/s) accepted in a truth file (about 20,000 kn)
+MAX_SPEED_MPS = 1e4
+#: largest |turn rate| (deg/s) accepted in a truth file
+MAX_TURN_RATE_DPS = 3600.0
 
 
 def _num(v: float) -> str:
@@ -153,7 +167,7 @@ def write_plots(path: str | Path, tracks: Iterable[tuple[str, Measurements]]) ->
             row += [_num(v) for v in p.sensor[i]]
             rows.append((float(p.t[i]), order, row))
     rows.sort(key=lambda r: (r[0], r[1]))
-    with open(path, "w", newline="") as fh:
+    with atomic_write(path, newline="") as fh:
         w = csv.writer(fh)
         w.writerow(header)
         w.writerows(r[2] for r in rows)
@@ -169,7 +183,7 @@ def write_clutter(
     :func:`~seatrack.io.plots.read_plots` (which needs strictly increasing times per track).
     """
     az = _az_deg(azimuth) if np.size(t) else np.zeros(0)
-    with open(path, "w", newline="") as fh:
+    with atomic_write(path, newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["time_s", "range_m", "azimuth_deg", "sensor_x_m", "sensor_y_m", "sensor_z_m"])
         for i in range(np.size(t)):
@@ -195,7 +209,7 @@ def write_bearings(
         Number of rows written (detected bearings only).
     """
     n = 0
-    with open(path, "w", newline="") as fh:
+    with atomic_write(path, newline="") as fh:
         w = csv.writer(fh)
         w.writerow(BEARING_COLUMNS)
         for cid, m in contacts:
@@ -237,7 +251,7 @@ def write_truth(
     named = trajectories if not isinstance(trajectories, Trajectory) else [("", trajectories)]
     with_name = not isinstance(trajectories, Trajectory)
     n = 0
-    with open(path, "w", newline="") as fh:
+    with atomic_write(path, newline="") as fh:
         w = csv.writer(fh)
         w.writerow((["target"] if with_name else []) + list(TRUTH_COLUMNS))
         for name, tr in named:
@@ -265,9 +279,20 @@ def read_truth(path: str | Path) -> dict[str, Trajectory]:
     Raises
     ------
     InputError
-        Naming the file and line (via :func:`seatrack.io.table.read_csv_table`).
+        Naming the file and line (via :func:`seatrack.io.table.read_csv_table`): a value
+        that is not a finite number or is implausible (``|time_s|`` beyond 2100 in Unix
+        seconds, ``|x|`` over 1e8 m, speed over :data:`MAX_SPEED_MPS`, course outside
+        [0, 360), turn rate over :data:`MAX_TURN_RATE_DPS`), or times not increasing.
     """
-    tab = read_csv_table(path, TRUTH_COLUMNS, ("target",), text=("target",))
+    checks = (
+        seconds("time_s"),
+        *(coordinate(c) for c in ("x_m", "y_m", "z_m")),
+        *(between(c, -MAX_SPEED_MPS, MAX_SPEED_MPS) for c in ("vx_mps", "vy_mps", "vz_mps")),
+        angle_deg("course_deg"),
+        between("speed_mps", 0.0, MAX_SPEED_MPS),
+        between("turn_rate_dps", -MAX_TURN_RATE_DPS, MAX_TURN_RATE_DPS),
+    )
+    tab = read_csv_table(path, TRUTH_COLUMNS, ("target",), text=("target",), checks=checks)
     names = tab["target"] if "target" in tab else np.full(len(tab), "")
     out: dict[str, Trajectory] = {}
     for name in dict.fromkeys(names.tolist()):

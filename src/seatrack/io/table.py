@@ -8,11 +8,46 @@ reason. Rows are never dropped silently: a row that cannot be used is either an 
 :attr:`Table.rejected` with its reason (``on_error="collect"``).
 
 Line numbers are 1-based and count the header as line 1, as in a text editor.
+
+Encoding
+--------
+Files are read as UTF-8; a UTF-8 byte-order mark is ignored. A file that is not valid
+UTF-8 is decoded line by line: each line that is not valid UTF-8 is read as Latin-1
+(ship names in AIS exports often are) and listed in :attr:`Table.latin1_lines`. A
+non-ASCII character can then only end up in a text column: in a numeric column it is
+reported as "not a number" with the file and line. CR, LF and CRLF line ends are all
+accepted.
+
+Declaring per-column checks
+---------------------------
+Beyond "a finite number", a reader states what each numeric column must hold with a
+tuple of :class:`Check` objects, built with the helpers below, and passes it as
+``checks=`` to :func:`read_csv_table`::
+
+    read_csv_table(path, ["time_s", "range_m", "azimuth_deg"],
+                   checks=(seconds("time_s"), positive("range_m"), angle_deg("azimuth_deg")))
+
+A value outside its range is a bad row like any other (an error naming the file, the
+line, the column, the value and the allowed range, or a rejected row with that reason).
+The helpers encode the physical limits used across seatrack:
+
+* :func:`seconds` -- a time in seconds, relative or Unix, ``|t| <=`` :data:`MAX_TIME_S`
+  (the Unix time of 2100-01-01);
+* :func:`unix_seconds` -- an absolute Unix time between 1970 and 2100;
+* :func:`positive` -- a range or other length ``> 0`` and at most :data:`MAX_DISTANCE_M`;
+* :func:`coordinate` -- an East/North/Up coordinate, ``|x| <=`` :data:`MAX_DISTANCE_M`;
+* :func:`sigma` -- a standard deviation, ``> 0``;
+* :func:`angle_deg` -- a bearing, azimuth, course or heading in ``[0, 360)`` degrees;
+* :func:`latitude`, :func:`longitude` -- degrees in ``[-90, 90]`` and ``[-180, 180]``;
+* :func:`between` -- any closed or half-open interval.
+
+Times must also be ordered: :func:`check_times` checks that per group after reading.
 """
 
 from __future__ import annotations
 
 import csv
+import io
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -21,7 +56,30 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["InputError", "Rejected", "Table", "read_csv_table", "check_times"]
+__all__ = [
+    "InputError",
+    "Rejected",
+    "Table",
+    "Check",
+    "read_csv_table",
+    "check_times",
+    "between",
+    "positive",
+    "coordinate",
+    "seconds",
+    "unix_seconds",
+    "sigma",
+    "angle_deg",
+    "latitude",
+    "longitude",
+    "MAX_TIME_S",
+    "MAX_DISTANCE_M",
+]
+
+#: largest accepted |time| in seconds: Unix time of 2100-01-01T00:00:00Z
+MAX_TIME_S = 4_102_444_800.0
+#: largest accepted distance or |coordinate| in metres (about 15 Earth radii)
+MAX_DISTANCE_M = 1e8
 
 
 class InputError(ValueError):
@@ -34,6 +92,94 @@ class Rejected:
 
     line: int
     reason: str
+
+
+@dataclass(frozen=True)
+class Check:
+    """The allowed values of one numeric column: an interval, closed unless ``*_open``.
+
+    Build one with :func:`between`, :func:`positive`, :func:`seconds`, ... rather than
+    directly. :meth:`problem` returns ``None`` for a good value, else the reason.
+    """
+
+    column: str
+    lo: float = -math.inf
+    hi: float = math.inf
+    lo_open: bool = False
+    hi_open: bool = False
+    note: str = ""
+
+    def problem(self, value: float, cell: str | None = None) -> str | None:
+        """Why ``value`` (written as ``cell`` in the file) is not allowed, or ``None``."""
+        lo, hi = self.lo, self.hi
+        shown = cell if cell is not None else f"{value:g}"
+        if not math.isfinite(value):
+            return f"{self.column} = {_short(shown)} is not a finite number"
+        if (
+            lo < value < hi
+            or (value == lo and not self.lo_open)
+            or (value == hi and not self.hi_open)
+        ):
+            return None
+        return f"{self.column} = {_short(shown)} {self.rule()}"
+
+    def rule(self) -> str:
+        """The allowed range in words, e.g. ``must be > 0`` or ``must be in [0, 360)``."""
+        if math.isinf(self.hi):
+            return f"must be {'>' if self.lo_open else '>='} {self.lo:g}"
+        if math.isinf(self.lo):
+            return f"must be {'<' if self.hi_open else '<='} {self.hi:g}"
+        a = "(" if self.lo_open else "["
+        b = ")" if self.hi_open else "]"
+        note = f" ({self.note})" if self.note else ""
+        return f"must be in {a}{self.lo:g}, {self.hi:g}{b}{note}"
+
+
+def between(
+    column: str, lo: float, hi: float, *, lo_open: bool = False, hi_open: bool = False
+) -> Check:
+    """``lo <= value <= hi`` (``<`` where ``lo_open`` / ``hi_open``)."""
+    return Check(column, lo, hi, lo_open, hi_open)
+
+
+def positive(column: str, hi: float = MAX_DISTANCE_M) -> Check:
+    """A length, range or period: ``0 < value <= hi`` (default :data:`MAX_DISTANCE_M`)."""
+    return Check(column, 0.0, hi, lo_open=True)
+
+
+def coordinate(column: str) -> Check:
+    """An East/North/Up coordinate in metres: ``|value| <=`` :data:`MAX_DISTANCE_M`."""
+    return Check(column, -MAX_DISTANCE_M, MAX_DISTANCE_M)
+
+
+def seconds(column: str) -> Check:
+    """A time in seconds (relative, or Unix before 2100): ``|value| <=`` :data:`MAX_TIME_S`."""
+    return Check(column, -MAX_TIME_S, MAX_TIME_S, note="s, relative or Unix time before 2100")
+
+
+def unix_seconds(column: str) -> Check:
+    """An absolute Unix time (s) from 1970-01-01 to before 2100-01-01."""
+    return Check(column, 0.0, MAX_TIME_S, hi_open=True, note="Unix time, 1970 to 2100")
+
+
+def sigma(column: str, hi: float = math.inf) -> Check:
+    """A standard deviation: ``0 < value <= hi``."""
+    return Check(column, 0.0, hi, lo_open=True)
+
+
+def angle_deg(column: str) -> Check:
+    """A bearing, azimuth, course or heading in degrees: ``[0, 360)``."""
+    return Check(column, 0.0, 360.0, hi_open=True)
+
+
+def latitude(column: str) -> Check:
+    """Latitude in degrees: ``[-90, 90]``."""
+    return Check(column, -90.0, 90.0)
+
+
+def longitude(column: str) -> Check:
+    """Longitude in degrees: ``[-180, 180]``."""
+    return Check(column, -180.0, 180.0)
 
 
 @dataclass
@@ -50,7 +196,11 @@ class Table:
     rejected : list of Rejected
         Rows that were not kept, with reasons (only with ``on_error="collect"``).
     n_read : int
-        Number of data rows read.
+        Number of data rows read (blank lines not counted).
+    latin1_lines : tuple of int
+        Lines that were not valid UTF-8 and were decoded as Latin-1.
+    blank_lines : tuple of int
+        Data lines that were empty or held only empty cells (skipped, not counted).
     """
 
     path: str
@@ -58,6 +208,8 @@ class Table:
     lines: NDArray[np.int64]
     rejected: list[Rejected] = field(default_factory=list)
     n_read: int = 0
+    latin1_lines: tuple[int, ...] = ()
+    blank_lines: tuple[int, ...] = ()
 
     def __getitem__(self, name: str) -> NDArray:
         return self.columns[name]
@@ -79,12 +231,63 @@ class Table:
         )
 
 
+def _short(text: str, limit: int = 40) -> str:
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def decode_text(data: bytes) -> tuple[str, tuple[int, ...]]:
+    """Decode file content: UTF-8 (BOM dropped), else Latin-1 line by line.
+
+    Returns the text and the 1-based numbers of the lines decoded as Latin-1.
+    """
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]
+    try:
+        return data.decode("utf-8"), ()
+    except UnicodeDecodeError:
+        pass
+    parts: list[str] = []
+    latin1: list[int] = []
+    for i, raw in enumerate(data.splitlines(keepends=True), start=1):
+        try:
+            parts.append(raw.decode("utf-8"))
+        except UnicodeDecodeError:
+            parts.append(raw.decode("latin-1"))
+            latin1.append(i)
+    return "".join(parts), tuple(latin1)
+
+
+def _read_text(p: Path) -> tuple[str, tuple[int, ...]]:
+    if not p.exists():
+        raise InputError(f"{p}: file not found")
+    if not p.is_file():
+        raise InputError(f"{p}: is a directory or a device, expected a CSV file")
+    try:
+        data = p.read_bytes()
+    except OSError as exc:
+        raise InputError(f"{p}: cannot read ({exc.strerror})") from None
+    return decode_text(data)
+
+
+def _header_problem(p: Path, header: list[str], missing: list[str]) -> InputError:
+    shown = [repr(h) if not h.isprintable() else h for h in header[:12]]
+    found = ", ".join(_short(h) for h in shown) + (", ..." if len(header) > 12 else "")
+    hint = ""
+    if len(header) == 1 and any(s in header[0] for s in (";", "\t")):
+        sep = "';'" if ";" in header[0] else "a tab"
+        hint = f" (the file seems to use {sep} as separator; seatrack reads comma-separated CSV)"
+    return InputError(
+        f"{p}: missing required column(s) {', '.join(missing)}; found {found or 'no columns'}{hint}"
+    )
+
+
 def read_csv_table(
     path: str | Path,
     required: Sequence[str],
     optional: Sequence[str] = (),
     text: Iterable[str] = (),
     on_error: str = "raise",
+    checks: Iterable[Check] = (),
 ) -> Table:
     """Read a CSV file with a header row into validated columns.
 
@@ -97,90 +300,99 @@ def read_csv_table(
     text : names among required/optional kept as strings.
     on_error : "raise" (first bad row raises :class:`InputError`) or "collect"
         (bad rows go to ``Table.rejected``).
+    checks : allowed ranges of numeric columns (see :class:`Check`); a column without
+        one only has to be a finite number. Empty optional cells are not checked.
 
     Raises
     ------
     InputError
-        Missing file, missing columns, empty file, or (``on_error="raise"``) a bad value.
+        Missing or unreadable file, missing or duplicated columns, empty file, or
+        (``on_error="raise"``) a bad value.
     """
+    if on_error not in ("raise", "collect"):
+        raise ValueError(f"on_error must be 'raise' or 'collect', got {on_error!r}")
     p = Path(path)
-    if not p.is_file():
-        raise InputError(f"{p}: file not found")
+    content, latin1 = _read_text(p)
     text_cols = set(text)
+    rules = {c.column: c for c in checks}
+    reader = csv.reader(io.StringIO(content, newline=""))
     try:
-        fh = p.open(newline="", encoding="utf-8-sig")
-    except OSError as exc:  # pragma: no cover - permissions
-        raise InputError(f"{p}: cannot open ({exc.strerror})") from exc
-    with fh:
-        reader = csv.reader(fh)
-        try:
-            header = next(reader)
-        except StopIteration:
-            raise InputError(f"{p}: file is empty (expected a header row)") from None
-        except csv.Error as exc:
-            raise InputError(f"{p}, line 1: not valid CSV ({exc})") from None
-        header = [h.strip() for h in header]
-        missing = [c for c in required if c not in header]
-        if missing:
-            raise InputError(
-                f"{p}: missing required column(s) {', '.join(missing)}; "
-                f"found {', '.join(header) or 'no columns'}"
-            )
-        wanted = list(required) + [c for c in optional if c in header]
-        idx = {c: header.index(c) for c in wanted}
-        req = set(required)
-        data: dict[str, list] = {c: [] for c in wanted}
-        lines: list[int] = []
-        rejected: list[Rejected] = []
-        n_read = 0
-        try:
-            for row in reader:
-                line = reader.line_num
-                if not row or all(not c.strip() for c in row):
-                    continue
-                n_read += 1
-                values: dict[str, object] = {}
-                problem = None
-                for c in wanted:
-                    j = idx[c]
-                    cell = row[j].strip() if j < len(row) else ""
-                    if c in text_cols:
-                        if cell == "" and c in req:
-                            problem = f"column {c} is empty"
-                            break
-                        values[c] = cell
-                        continue
-                    if cell == "":
-                        if c in req:
-                            problem = f"column {c} is empty"
-                            break
-                        values[c] = math.nan
-                        continue
-                    try:
-                        v = float(cell)
-                    except ValueError:
-                        problem = f"column {c} = {cell!r} is not a number"
+        header = next(reader)
+    except StopIteration:
+        raise InputError(f"{p}: file is empty (expected a header row)") from None
+    except csv.Error as exc:
+        raise InputError(f"{p}, line 1: not valid CSV ({exc})") from None
+    header = [h.strip() for h in header]
+    missing = [c for c in required if c not in header]
+    if missing:
+        raise _header_problem(p, header, missing)
+    wanted = list(dict.fromkeys(list(required) + [c for c in optional if c in header]))
+    twice = [c for c in wanted if header.count(c) > 1]
+    if twice:
+        raise InputError(f"{p}, line 1: column {twice[0]} appears more than once in the header")
+    idx = {c: header.index(c) for c in wanted}
+    req = set(required)
+    data: dict[str, list] = {c: [] for c in wanted}
+    lines: list[int] = []
+    rejected: list[Rejected] = []
+    blank: list[int] = []
+    n_read = 0
+    try:
+        for row in reader:
+            line = reader.line_num
+            if not row or all(not c.strip() for c in row):
+                blank.append(line)
+                continue
+            n_read += 1
+            values: dict[str, object] = {}
+            problem = None
+            for c in wanted:
+                j = idx[c]
+                cell = row[j].strip() if j < len(row) else ""
+                if c in text_cols:
+                    if cell == "" and c in req:
+                        problem = f"column {c} is empty"
                         break
-                    if not math.isfinite(v):
-                        problem = f"column {c} = {cell!r} is not a finite number"
-                        break
-                    values[c] = v
-                if problem is not None:
-                    if on_error == "raise":
-                        raise InputError(f"{p}, line {line}: {problem}")
-                    rejected.append(Rejected(line, problem))
+                    values[c] = cell
                     continue
-                for c in wanted:
-                    data[c].append(values[c])
-                lines.append(line)
-        except csv.Error as exc:
-            raise InputError(f"{p}, line {reader.line_num}: not valid CSV ({exc})") from None
+                if cell == "":
+                    if c in req:
+                        problem = f"column {c} is empty"
+                        break
+                    values[c] = math.nan
+                    continue
+                try:
+                    v = float(cell)
+                except ValueError:
+                    problem = f"column {c} = {_short(repr(cell))} is not a number"
+                    break
+                if not math.isfinite(v):
+                    problem = f"column {c} = {_short(repr(cell))} is not a finite number"
+                    break
+                rule = rules.get(c)
+                if rule is not None:
+                    problem = rule.problem(v, cell)
+                    if problem is not None:
+                        break
+                values[c] = v
+            if problem is not None:
+                if on_error == "raise":
+                    raise InputError(f"{p}, line {line}: {problem}")
+                rejected.append(Rejected(line, problem))
+                continue
+            for c in wanted:
+                data[c].append(values[c])
+            lines.append(line)
+    except csv.Error as exc:
+        raise InputError(f"{p}, line {reader.line_num}: not valid CSV ({exc})") from None
     if n_read == 0:
         raise InputError(f"{p}: no data rows after the header")
     cols: dict[str, NDArray] = {}
     for c in wanted:
         cols[c] = np.array(data[c], dtype=str if c in text_cols else float)
-    return Table(str(p), cols, np.array(lines, dtype=np.int64), rejected, n_read)
+    return Table(
+        str(p), cols, np.array(lines, dtype=np.int64), rejected, n_read, latin1, tuple(blank)
+    )
 
 
 def check_times(

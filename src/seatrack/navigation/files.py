@@ -16,7 +16,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from seatrack.geometry import bearing_rad_to_deg
-from seatrack.io.table import InputError, check_times, read_csv_table
+from seatrack.io.atomic import atomic_write
+from seatrack.io.table import between, check_times, positive, read_csv_table, seconds
 from seatrack.navigation.navigator import Echoes, NavResult
 
 FloatArray = NDArray[np.float64]
@@ -37,24 +38,26 @@ NAV_COLUMNS = (
 )
 
 
+#: largest |turn rate| accepted in GYRO.csv, deg/s (ten revolutions a second)
+MAX_TURN_RATE_DPS = 3600.0
+
+
 def read_echoes(path: str | Path) -> Echoes:
-    """Read ECHOES.csv (angles to radians). Errors name the file and line."""
-    t = read_csv_table(path, required=["time_s", "antenna_deg", "range_m"], optional=["amplitude"])
+    """Read ECHOES.csv (angles to radians). Errors name the file and line.
+
+    Checks: ``time_s`` finite, within +-:data:`~seatrack.io.table.MAX_TIME_S` and sorted
+    (ties allowed: one pulse, several range bins); ``range_m`` in (0, 1e8] m;
+    ``antenna_deg`` in [-360, 720]; ``amplitude`` finite when given.
+    """
+    t = read_csv_table(
+        path,
+        required=["time_s", "antenna_deg", "range_m"],
+        optional=["amplitude"],
+        checks=(seconds("time_s"), positive("range_m"), between("antenna_deg", -360.0, 720.0)),
+    )
     check_times(t, "time_s", strict=False)
-    r = t["range_m"]
-    bad = np.flatnonzero(r <= 0)
-    if bad.size:
-        raise InputError(
-            f"{t.path}, line {t.lines[bad[0]]}: range_m = {r[bad[0]]:g} must be positive"
-        )
     a = t["antenna_deg"]
-    bad = np.flatnonzero((a < -360.0) | (a > 720.0))
-    if bad.size:
-        raise InputError(
-            f"{t.path}, line {t.lines[bad[0]]}: antenna_deg = {a[bad[0]]:g} "
-            "is not an angle in degrees"
-        )
-    return Echoes(t["time_s"], np.mod(np.radians(a), 2 * np.pi), r, t.path, t.lines)
+    return Echoes(t["time_s"], np.mod(np.radians(a), 2 * np.pi), t["range_m"], t.path, t.lines)
 
 
 def write_echoes(path: str | Path, t: ArrayLike, antenna: ArrayLike, rng: ArrayLike,
@@ -67,12 +70,22 @@ def write_echoes(path: str | Path, t: ArrayLike, antenna: ArrayLike, rng: ArrayL
         cols.append(np.asarray(amplitude, float))
         head += ",amplitude"
         fmt.append("%.1f")
-    np.savetxt(path, np.column_stack(cols), fmt=fmt, delimiter=",", header=head, comments="")
+    with atomic_write(path) as fh:
+        np.savetxt(fh, np.column_stack(cols), fmt=fmt, delimiter=",", header=head, comments="")
 
 
 def read_gyro(path: str | Path) -> tuple[FloatArray, FloatArray]:
-    """Read GYRO.csv; returns times (s) and turn rates (rad/s)."""
-    t = read_csv_table(path, required=["time_s", "turn_rate_dps"])
+    """Read GYRO.csv; returns times (s) and turn rates (rad/s).
+
+    Checks: ``time_s`` finite, within +-:data:`~seatrack.io.table.MAX_TIME_S` and strictly
+    increasing; ``|turn_rate_dps| <=`` :data:`MAX_TURN_RATE_DPS`.
+    """
+    lim = MAX_TURN_RATE_DPS
+    t = read_csv_table(
+        path,
+        required=["time_s", "turn_rate_dps"],
+        checks=(seconds("time_s"), between("turn_rate_dps", -lim, lim)),
+    )
     check_times(t, "time_s", strict=True)
     return t["time_s"], np.radians(t["turn_rate_dps"])
 
@@ -80,8 +93,9 @@ def read_gyro(path: str | Path) -> tuple[FloatArray, FloatArray]:
 def write_gyro(path: str | Path, t: ArrayLike, rate: ArrayLike) -> None:
     """Write GYRO.csv from times (s) and turn rates (rad/s)."""
     data = np.column_stack([np.asarray(t, float), np.degrees(np.asarray(rate, float))])
-    np.savetxt(path, data, fmt=["%.3f", "%.6f"], delimiter=",", header="time_s,turn_rate_dps",
-               comments="")  # fmt: skip
+    with atomic_write(path) as fh:
+        np.savetxt(fh, data, fmt=["%.3f", "%.6f"], delimiter=",", header="time_s,turn_rate_dps",
+                   comments="")  # fmt: skip
 
 
 def write_nav(path: str | Path, res: NavResult) -> None:
@@ -102,4 +116,5 @@ def write_nav(path: str | Path, res: NavResult) -> None:
         ]
     )
     fmt = ["%.3f", "%.2f", "%.2f", "%.3f", "%.3f", "%.3f", "%.4f", "%.2f", "%.2f", "%.3f"]
-    np.savetxt(path, data, fmt=fmt, delimiter=",", header=",".join(NAV_COLUMNS), comments="")
+    with atomic_write(path) as fh:
+        np.savetxt(fh, data, fmt=fmt, delimiter=",", header=",".join(NAV_COLUMNS), comments="")

@@ -199,6 +199,29 @@ def _antenna_unwrap(
     return phi0, base + phi0 + res
 
 
+#: most predictor ticks one navigate() call runs (about 18 days at 2.5 s / 16 ticks)
+MAX_TICKS = 10_000_000
+
+
+def _tick_count(et: FloatArray, start: float, dt: float, where: Echoes) -> int:
+    """Number of predictor ticks from ``start`` to the last echo, bounded before any work."""
+    span = float(et[-1]) - start
+    n = span / dt
+    last = int(et.size - 1)
+    loc = f"line {where.lines[last]}" if where.lines is not None else f"row {last + 1}"
+    if not (np.isfinite(n) and n <= MAX_TICKS):
+        raise ValueError(
+            f"{where.source}, {loc}: the echo log spans {span:g} s, {n:.3g} filter cycles of "
+            f"{dt:g} s; at most {MAX_TICKS} are run (split the log)"
+        )
+    if n < 1:
+        raise ValueError(
+            f"{where.source}, {loc}: the echo log spans {span:g} s, less than one filter "
+            f"cycle ({dt:g} s)"
+        )
+    return int(np.floor(n))
+
+
 def _per_tick(ticks: NDArray[Any], t: NDArray[Any]) -> NDArray[np.int64]:
     """Tick index of each sample: sample in (ticks[k-1], ticks[k]] goes to tick k."""
     return np.searchsorted(ticks, t, side="left").astype(np.int64)
@@ -466,7 +489,7 @@ def navigate(
     noise = cfg.noise if gyro is not None else replace(cfg.noise, q_turn=cfg.q_turn_without_gyro)
     flt: NavFilter = (KalmanNav if cfg.method == "ekf" else SRIFNav)(noise)
     dt = cfg.antenna_period / cfg.steps_per_rev
-    n_ticks = int(np.floor((et[-1] - start) / dt))
+    n_ticks = _tick_count(et, start, dt, echoes)
     ticks = np.asarray(start + dt * np.arange(1, n_ticks + 1), dtype=np.float64)
     g = None
     if gyro is not None:

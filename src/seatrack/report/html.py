@@ -1,21 +1,30 @@
-"""Offline HTML map of AIS tracks, and GeoJSON export.
+"""HTML map of AIS tracks (Leaflet, one self-contained file), and GeoJSON export.
 
-The HTML page is one self-contained file: the data are embedded as JSON and drawn by a
-small inline canvas renderer (Web Mercator, pan with the mouse, zoom with the wheel); no
-script or style is loaded from the network. Background map tiles are optional
-(``tile_url``, e.g. ``https://tile.openstreetmap.org/{z}/{x}/{y}.png``) and off by default,
-so the page works fully offline.
+The page (:func:`html_page`, :func:`write_html`) is one HTML file carrying Leaflet, its own
+script and the data: it needs no server and works offline. Online, it shows OpenStreetMap
+tiles with the OpenSeaMap seamark overlay; when tiles fail to load it says so and shows the
+Natural Earth 1:10m land carried in the page. OpenStreetMap's tile usage policy requires a
+Referer header, which a page opened from disk (``file://``) cannot send, so such a page
+does not ask OpenStreetMap for tiles and tells the reader to serve it over http(s) (e.g.
+``python -m http.server``); a ``tile_url`` of another provider is used from disk too.
 
-What is drawn, per vessel: raw reports (small grey dots), the smoothed track (one coloured
-polyline per track segment) and outliers (red crosses). For each vessel it has drawn, the
-script appends ``<li class="vessel" data-mmsi=.. data-raw=.. data-track=.. data-outliers=..>``
-to the legend, and finally sets ``data-drawn-vessels`` on ``<body>`` -- so a headless
-browser's DOM dump shows what was drawn.
+It shows, per vessel: the smoothed track (one coloured polyline, one part per track
+segment), its outliers (small red dots), and, for the vessel selected in the list or on the
+map, its raw reports. The first view is the 1st-99th percentile box of the smoothed
+positions; the list searches by MMSI; a time slider shows every vessel's position at a
+chosen time. Large inputs are decimated to budgets, said on the page: see
+:mod:`seatrack.report.map_page`.
+
+For headless-browser tests, the script sets on ``<body>`` ``data-vessels``, ``data-paths``
+(polylines drawn), ``data-vertices``, ``data-reports``, ``data-outliers``, ``data-land``
+(coast rings) and ``data-tiles`` (``off``, ``needs-http``, ``waiting``, ``failed``,
+``partial``, ``loaded``), and lists one ``<li class="vessel" data-mmsi data-parts
+data-vertices data-reports data-outliers>`` per vessel; small maps use SVG paths with
+class ``st-track st-v<MMSI>``.
 """
 
 from __future__ import annotations
 
-import html
 import json
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -24,6 +33,9 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
+
+from seatrack.io.atomic import atomic_write
+from seatrack.report.map_page import OPENSEAMAP_URL, MapOptions, page_data, render_page
 
 FloatArray = NDArray[np.float64]
 
@@ -83,33 +95,29 @@ def vessel_tracks(
     outlier: NDArray[np.bool_],
     valid: NDArray[np.bool_],
 ) -> list[VesselTrack]:
-    """Group per-report arrays into :class:`VesselTrack` (valid rows only, time-sorted)."""
+    """Group per-report arrays into :class:`VesselTrack` (valid rows only, time-sorted).
+
+    Rows already in time order within each vessel (the usual case: a log is written as it
+    is received) are grouped by one stable sort on the MMSI; otherwise by MMSI and time.
+    The arrays of the returned tracks are slices of one gathered copy of the inputs.
+    """
     idx = np.flatnonzero(valid)
     if idx.size == 0:
         return []
-    order = idx[np.lexsort((t[idx], mmsi[idx]))]
-    m = mmsi[order]
-    cuts = np.flatnonzero(np.r_[True, m[1:] != m[:-1], True])
-    out = []
-    for a, b in zip(cuts[:-1], cuts[1:], strict=True):
-        rows = order[a:b]
-        out.append(
-            VesselTrack(
-                int(m[a]),
-                t[rows],
-                raw_lat[rows],
-                raw_lon[rows],
-                lat[rows],
-                lon[rows],
-                segment[rows],
-                outlier[rows],
-            )
-        )
-    return out
-
-
-def _r(a: FloatArray, nd: int = 6) -> list[Any]:
-    return [None if not np.isfinite(v) else round(float(v), nd) for v in a]
+    m, tv = mmsi[idx], t[idx]
+    order = np.argsort(m, kind="stable")
+    ms, ts = m[order], tv[order]
+    if np.any((ms[1:] == ms[:-1]) & (ts[1:] < ts[:-1])):
+        order = np.lexsort((tv, m))
+        ms = m[order]
+    rows = idx[order]
+    tt, rla, rlo, la, lo = (a[rows] for a in (t, raw_lat, raw_lon, lat, lon))
+    seg, out = segment[rows], outlier[rows]
+    cuts = np.flatnonzero(np.r_[True, ms[1:] != ms[:-1], True]).tolist()
+    return [
+        VesselTrack(int(ms[a]), tt[a:b], rla[a:b], rlo[a:b], la[a:b], lo[a:b], seg[a:b], out[a:b])
+        for a, b in zip(cuts[:-1], cuts[1:], strict=True)
+    ]
 
 
 def _segments(v: VesselTrack) -> list[tuple[int, NDArray[np.int64]]]:
@@ -185,148 +193,39 @@ def geojson(tracks: Sequence[VesselTrack], include_reports: bool = False) -> dic
 def write_geojson(
     path: str | Path, tracks: Sequence[VesselTrack], include_reports: bool = False
 ) -> None:
-    """Write :func:`geojson` to ``path``."""
-    Path(path).write_text(json.dumps(geojson(tracks, include_reports)), encoding="utf-8")
+    """Write :func:`geojson` to ``path`` (atomically)."""
+    with atomic_write(path) as fh:
+        json.dump(geojson(tracks, include_reports), fh, separators=(",", ":"))
 
 
-_SCRIPT = r"""
-(function () {
-  "use strict";
-  var D = JSON.parse(document.getElementById("seatrack-data").textContent);
-  var cv = document.getElementById("map"), ctx = cv.getContext("2d");
-  var legend = document.getElementById("legend");
-  function merc(lat, lon) {            // Web Mercator, unit square (x east, y south)
-    var s = Math.sin(lat * Math.PI / 180);
-    return [lon / 360 + 0.5, 0.5 - Math.log((1 + s) / (1 - s)) / (4 * Math.PI)];
-  }
-  var minx = 1, maxx = 0, miny = 1, maxy = 0;
-  D.vessels.forEach(function (v) {
-    v.P = v.rlat.map(function (la, i) { return merc(la, v.rlon[i]); });
-    v.S = v.segs.map(function (sg) {
-      return sg.lat.map(function (la, i) { return merc(la, sg.lon[i]); });
-    });
-    v.P.forEach(function (p) {
-      minx = Math.min(minx, p[0]); maxx = Math.max(maxx, p[0]);
-      miny = Math.min(miny, p[1]); maxy = Math.max(maxy, p[1]);
-    });
-  });
-  var W, H, scale, ox, oy;
-  function resize() {
-    W = cv.width = cv.clientWidth || 900; H = cv.height = cv.clientHeight || 600;
-  }
-  function fit(x0, x1, y0, y1) {
-    var dx = Math.max(x1 - x0, 1e-9), dy = Math.max(y1 - y0, 1e-9);
-    scale = 0.9 * Math.min(W / dx, H / dy);
-    ox = (x0 + x1) / 2; oy = (y0 + y1) / 2;
-  }
-  function px(p) { return [(p[0] - ox) * scale + W / 2, (p[1] - oy) * scale + H / 2]; }
-  var tiles = {};
-  function drawTiles() {
-    if (!D.tile_url) return;
-    var z = Math.max(0, Math.min(18, Math.floor(Math.log2(scale / 256))));
-    var n = Math.pow(2, z), ts = scale / n;
-    var x0 = Math.floor((ox - W / 2 / scale) * n), x1 = Math.floor((ox + W / 2 / scale) * n);
-    var y0 = Math.floor((oy - H / 2 / scale) * n), y1 = Math.floor((oy + H / 2 / scale) * n);
-    for (var tx = x0; tx <= x1; tx++) for (var ty = y0; ty <= y1; ty++) {
-      if (ty < 0 || ty >= n) continue;
-      var key = z + "/" + tx + "/" + ty, img = tiles[key];
-      if (!img) {
-        img = tiles[key] = new Image();
-        img.onload = draw;
-        img.src = D.tile_url.replace("{z}", z)
-          .replace("{x}", ((tx % n) + n) % n).replace("{y}", ty);
-      }
-      if (img.complete && img.naturalWidth) {
-        var q = px([tx / n, ty / n]);
-        ctx.drawImage(img, q[0], q[1], ts + 0.5, ts + 0.5);
-      }
-    }
-  }
-  var drawnOnce = false;
-  function draw() {
-    ctx.fillStyle = "#eef3f7"; ctx.fillRect(0, 0, W, H);
-    drawTiles();
-    D.vessels.forEach(function (v, k) {
-      var col = "hsl(" + ((k * 137.5) % 360) + ",70%,38%)", nr = 0, nt = 0, no = 0;
-      ctx.fillStyle = "rgba(90,90,90,0.55)";
-      v.P.forEach(function (p) { var q = px(p); ctx.fillRect(q[0] - 1, q[1] - 1, 2, 2); nr++; });
-      ctx.strokeStyle = col; ctx.lineWidth = 1.6;
-      v.S.forEach(function (seg) {
-        ctx.beginPath();
-        seg.forEach(function (p, i) {
-          var q = px(p);
-          if (i) ctx.lineTo(q[0], q[1]); else ctx.moveTo(q[0], q[1]);
-          nt++;
-        });
-        ctx.stroke();
-      });
-      ctx.strokeStyle = "#d00"; ctx.lineWidth = 1.5;
-      v.out.forEach(function (i) {
-        var q = px(v.P[i]); ctx.beginPath();
-        ctx.moveTo(q[0] - 4, q[1] - 4); ctx.lineTo(q[0] + 4, q[1] + 4);
-        ctx.moveTo(q[0] + 4, q[1] - 4); ctx.lineTo(q[0] - 4, q[1] + 4); ctx.stroke(); no++;
-      });
-      if (!drawnOnce) {
-        var li = document.createElement("li");
-        li.className = "vessel"; li.dataset.mmsi = v.mmsi;
-        li.dataset.raw = nr; li.dataset.track = nt; li.dataset.outliers = no;
-        li.style.color = col;
-        li.textContent = v.mmsi + " (" + nr + " reports, " + no + " outliers)";
-        li.onclick = function () {
-          var xs = v.P.map(function (p) { return p[0]; });
-          var ys = v.P.map(function (p) { return p[1]; });
-          fit(Math.min.apply(null, xs), Math.max.apply(null, xs),
-              Math.min.apply(null, ys), Math.max.apply(null, ys));
-          draw();
-        };
-        legend.appendChild(li);
-      }
-    });
-    if (!drawnOnce) {
-      document.body.dataset.drawnVessels = D.vessels.length;
-      drawnOnce = true;
-    }
-  }
-  resize(); fit(minx, maxx, miny, maxy); draw();
-  var drag = null;
-  cv.addEventListener("mousedown", function (e) { drag = [e.clientX, e.clientY]; });
-  window.addEventListener("mouseup", function () { drag = null; });
-  window.addEventListener("mousemove", function (e) {
-    if (!drag) return;
-    ox -= (e.clientX - drag[0]) / scale; oy -= (e.clientY - drag[1]) / scale;
-    drag = [e.clientX, e.clientY]; draw();
-  });
-  cv.addEventListener("wheel", function (e) {
-    e.preventDefault();
-    var f = e.deltaY < 0 ? 1.25 : 0.8, r = cv.getBoundingClientRect();
-    var mx = (e.clientX - r.left - W / 2) / scale + ox;
-    var my = (e.clientY - r.top - H / 2) / scale + oy;
-    scale *= f; ox = mx - (mx - ox) / f; oy = my - (my - oy) / f; draw();
-  }, {passive: false});
-  window.addEventListener("resize", function () { resize(); draw(); });
-})();
-"""
+def _joined_view(parts: list[NDArray[Any]]) -> NDArray[Any] | None:
+    """The parts as one view when they are consecutive slices of one 1-D array (as
+    :func:`vessel_tracks` makes them), else ``None``."""
+    base = parts[0].base
+    if not isinstance(base, np.ndarray) or base.ndim != 1 or not base.flags.c_contiguous:
+        return None
+    item = base.itemsize
+    ptr = base.__array_interface__["data"][0]
+    pos = parts[0].__array_interface__["data"][0]
+    start = (pos - ptr) // item
+    for p in parts:
+        if p.base is not base or p.ndim != 1 or not p.flags.c_contiguous:
+            return None
+        if p.__array_interface__["data"][0] != pos:
+            return None
+        pos += p.size * item
+    return base[start : start + (pos - ptr) // item - start]
 
-_PAGE = """<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8">
-<title>{title}</title>
-<style>
-body {{ margin: 0; font: 13px sans-serif; display: flex; height: 100vh; }}
-#side {{ width: 260px; overflow-y: auto; padding: 8px; border-right: 1px solid #ccc; }}
-#map {{ flex: 1 1 auto; min-width: 0; height: 100vh; display: block; cursor: grab; }}
-li.vessel {{ cursor: pointer; }}
-</style></head>
-<body data-drawn-vessels="0">
-<div id="side"><h3>{title}</h3>
-<p>{summary}</p>
-<p>grey dots: AIS reports; lines: smoothed tracks; red crosses: outliers.
-Drag to pan, wheel to zoom, click a vessel to zoom to it.</p>
-<ul id="legend"></ul></div>
-<canvas id="map"></canvas>
-<script type="application/json" id="seatrack-data">{data}</script>
-<script>{script}</script>
-</body></html>
-"""
+
+def _concat(tracks: Sequence[VesselTrack], name: str, dtype: Any) -> NDArray[Any]:
+    """One field of all tracks, concatenated (a view, not a copy, when it can be)."""
+    if not tracks:
+        return np.zeros(0, dtype)
+    parts = [getattr(v, name) for v in tracks]
+    joined = _joined_view(parts)
+    if joined is not None and joined.dtype == dtype:
+        return joined
+    return np.concatenate([np.asarray(p, dtype) for p in parts])
 
 
 def html_page(
@@ -334,30 +233,52 @@ def html_page(
     title: str = "seatrack AIS tracks",
     summary: str = "",
     tile_url: str | None = None,
+    *,
+    seamark_url: str | None = OPENSEAMAP_URL,
+    online: bool = True,
+    max_vertices: int = 250_000,
+    max_reports: int = 100_000,
+    max_outliers: int = 20_000,
+    max_land_vertices: int = 40_000,
 ) -> str:
-    """The self-contained HTML page (see the module docstring)."""
-    vessels = []
-    for v in tracks:
-        segs = [{"lat": _r(v.lat[rows], 6), "lon": _r(v.lon[rows], 6)} for _, rows in _segments(v)]
-        vessels.append(
-            {
-                "mmsi": v.mmsi,
-                "rlat": _r(v.raw_lat, 6),
-                "rlon": _r(v.raw_lon, 6),
-                "segs": segs,
-                "out": np.flatnonzero(v.outlier).tolist(),
-            }
-        )
-    data = json.dumps({"vessels": vessels, "tile_url": tile_url}, separators=(",", ":"))
-    data = data.replace("</", "<\\/")  # never close the script element from inside the data
-    return _PAGE.format(
-        title=html.escape(title),
-        summary=html.escape(summary),
-        data=data,
-        script=_SCRIPT,
+    """The self-contained HTML map page (see the module docstring).
+
+    Parameters
+    ----------
+    tracks : vessels to show (:func:`vessel_tracks`).
+    title, summary : page heading and summary text (escaped).
+    tile_url : base tile URL template ``.../{z}/{x}/{y}.png``; ``None`` = OpenStreetMap.
+    seamark_url : seamark overlay tile template (``None``: no overlay).
+    online : ``False`` for a page that loads no tiles at all (Natural Earth land only).
+    max_vertices, max_reports, max_outliers, max_land_vertices : what the page carries at
+        most (:class:`~seatrack.report.map_page.MapOptions`).
+    """
+    opts = MapOptions(
+        tile_url=tile_url,
+        seamark_url=seamark_url,
+        online=online,
+        max_vertices=max_vertices,
+        max_reports=max_reports,
+        max_outliers=max_outliers,
+        max_land_vertices=max_land_vertices,
     )
+    data = page_data(
+        np.array([v.mmsi for v in tracks], dtype=np.int64),
+        np.array([v.t.size for v in tracks], dtype=np.int64),
+        _concat(tracks, "t", np.float64),
+        _concat(tracks, "raw_lat", np.float64),
+        _concat(tracks, "raw_lon", np.float64),
+        _concat(tracks, "lat", np.float64),
+        _concat(tracks, "lon", np.float64),
+        _concat(tracks, "segment", np.int64),
+        _concat(tracks, "outlier", np.bool_),
+        opts,
+    )
+    return render_page(title, summary, data)
 
 
 def write_html(path: str | Path, tracks: Sequence[VesselTrack], **kwargs: Any) -> None:
-    """Write :func:`html_page` to ``path``."""
-    Path(path).write_text(html_page(tracks, **kwargs), encoding="utf-8")
+    """Write :func:`html_page` (same keyword arguments) to ``path`` (atomically)."""
+    page = html_page(tracks, **kwargs)
+    with atomic_write(path) as fh:
+        fh.write(page)

@@ -176,8 +176,16 @@ def error_figure(
 
 
 def save(fig: Any, path: str | Path, dpi: int = 110) -> Path:
-    """Write ``fig`` to ``path`` (PNG by extension) and return the path."""
+    """Write ``fig`` to ``path`` (format by extension, PNG by default) and return the path.
+
+    The file is written atomically (:func:`seatrack.io.atomic.atomic_path`): a failed
+    write leaves the previous file intact and no temporary behind. The folder is created
+    when missing; a bad path raises :class:`~seatrack.io.atomic.OutputError`.
+    """
+    from seatrack.io.atomic import atomic_path
+
     p = Path(path)
-    p.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(p, dpi=dpi)
+    fmt = p.suffix[1:].lower() or "png"
+    with atomic_path(p) as tmp:
+        fig.savefig(tmp, dpi=dpi, format=fmt)
     return p

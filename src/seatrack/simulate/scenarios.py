@@ -71,8 +71,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.geometry import KNOT_MPS, geodetic_to_enu
-from seatrack.io.table import InputError
+from seatrack.io.table import MAX_TIME_S, InputError
 from seatrack.simulate.sensors import Measurements, NoiseModel, observe, uniform_clutter
+from seatrack.simulate.toml_reader import TomlReader, describe, join_key
 from seatrack.simulate.trajectories import Leg, Trajectory, trajectory
 
 FloatArray = NDArray[np.float64]
@@ -109,6 +110,14 @@ _SIGMA_KEYS = {
     "elevation": ("elevation_deg", math.pi / 180.0),
     "range_rate": ("range_rate_mps", 1.0),
 }
+#: most samples on one time grid (truth, or one sensor's scans) in a simulated run
+MAX_SAMPLES = 1_000_000
+#: most samples of all platforms on all grids in a simulated run (bounds memory: ~1 GB)
+MAX_POINTS = 5_000_000
+#: most Monte-Carlo runs a scenario may ask for
+MAX_RUNS = 100_000
+#: largest outlier variance multiplier
+MAX_OUTLIER_SCALE = 1e6
 #: canonical order of components in measurements
 _ORDER = ("azimuth", "range", "elevation", "range_rate")
 
@@ -276,127 +285,6 @@ class Scenario:
 # ---------------------------------------------------------------------------
 # Loading and validation
 # ---------------------------------------------------------------------------
-class _Reader:
-    """Typed access to a TOML table with errors naming the file and key path."""
-
-    def __init__(self, path: str):
-        self.path = path
-
-    def error(self, key: str, problem: str) -> InputError:
-        where = f"{self.path}: {key}" if key else self.path
-        return InputError(f"{where}: {problem}")
-
-    def table(self, value: Any, key: str) -> dict[str, Any]:
-        if not isinstance(value, dict):
-            raise self.error(key, f"expected a table, got {_kind(value)}")
-        return value
-
-    def check_keys(self, tab: Mapping[str, Any], prefix: str, allowed: Sequence[str]) -> None:
-        for k in tab:
-            if k not in allowed:
-                raise self.error(
-                    _join(prefix, k), f"unknown key; allowed keys are {', '.join(allowed)}"
-                )
-
-    def number(
-        self,
-        tab: Mapping[str, Any],
-        prefix: str,
-        key: str,
-        default: float | None = None,
-        required: bool = False,
-        minimum: float | None = None,
-        positive: bool = False,
-        maximum: float | None = None,
-    ) -> float | None:
-        kp = _join(prefix, key)
-        if key not in tab:
-            if required:
-                raise self.error(kp, "missing required key")
-            return default
-        v = tab[key]
-        if isinstance(v, bool) or not isinstance(v, (int, float)):
-            raise self.error(kp, f"expected a number, got {_kind(v)}")
-        v = float(v)
-        if not math.isfinite(v):
-            raise self.error(kp, f"must be finite, got {v}")
-        if positive and v <= 0:
-            raise self.error(kp, f"must be > 0, got {v:g}")
-        if minimum is not None and v < minimum:
-            raise self.error(kp, f"must be >= {minimum:g}, got {v:g}")
-        if maximum is not None and v > maximum:
-            raise self.error(kp, f"must be <= {maximum:g}, got {v:g}")
-        return v
-
-    def req(self, tab: Mapping[str, Any], prefix: str, key: str, **kw: Any) -> float:
-        v = self.number(tab, prefix, key, required=True, **kw)
-        assert v is not None
-        return v
-
-    def integer(
-        self, tab: Mapping[str, Any], prefix: str, key: str, default: int, minimum: int
-    ) -> int:
-        kp = _join(prefix, key)
-        if key not in tab:
-            return default
-        v = tab[key]
-        if isinstance(v, bool) or not isinstance(v, int):
-            raise self.error(kp, f"expected an integer, got {_kind(v)}")
-        if v < minimum:
-            raise self.error(kp, f"must be >= {minimum}, got {v}")
-        return v
-
-    def string(
-        self, tab: Mapping[str, Any], prefix: str, key: str, default: str | None = None
-    ) -> str:
-        kp = _join(prefix, key)
-        if key not in tab:
-            if default is None:
-                raise self.error(kp, "missing required key")
-            return default
-        v = tab[key]
-        if not isinstance(v, str):
-            raise self.error(kp, f"expected a string, got {_kind(v)}")
-        return v
-
-    def vector(
-        self, tab: Mapping[str, Any], prefix: str, key: str, sizes: tuple[int, ...]
-    ) -> FloatArray:
-        kp = _join(prefix, key)
-        v = tab[key]
-        if not isinstance(v, list) or len(v) not in sizes:
-            want = " or ".join(str(s) for s in sizes)
-            raise self.error(kp, f"expected a list of {want} numbers, got {_kind(v)}")
-        out = []
-        for i, e in enumerate(v):
-            if (
-                isinstance(e, bool)
-                or not isinstance(e, (int, float))
-                or not math.isfinite(float(e))
-            ):
-                raise self.error(f"{kp}[{i}]", f"expected a finite number, got {_kind(e)}")
-            out.append(float(e))
-        return np.asarray(out)
-
-
-def _join(prefix: str, key: str) -> str:
-    return f"{prefix}.{key}" if prefix else key
-
-
-def _kind(v: Any) -> str:
-    if isinstance(v, bool):
-        return f"boolean {str(v).lower()}"
-    if isinstance(v, (int, float)):
-        return f"number {v!r}"
-    if isinstance(v, str):
-        return f"string {v!r}"
-    if isinstance(v, list):
-        return f"a list of {len(v)} items"
-    if isinstance(v, dict):
-        return "a table"
-    return type(v).__name__
-
-
 _TOP_KEYS = (
     "name",
     "description",
@@ -445,26 +333,27 @@ _SENSOR_KEYS = (
 
 
 def _speed(
-    r: _Reader, tab: Mapping[str, Any], prefix: str, kn: str, mps: str, required: bool
+    r: TomlReader, tab: Mapping[str, Any], prefix: str, kn: str, mps: str, required: bool
 ) -> float | None:
     if kn in tab and mps in tab:
-        raise r.error(_join(prefix, kn), f"give either {kn} or {mps}, not both")
+        raise r.error(join_key(prefix, kn), f"give either {kn} or {mps}, not both")
     if kn in tab:
         return r.req(tab, prefix, kn, minimum=0.0) * KNOT_MPS
     if mps in tab:
         return r.req(tab, prefix, mps, minimum=0.0)
     if required:
-        raise r.error(_join(prefix, kn), f"missing required key (speed as {kn} or {mps})")
+        raise r.error(join_key(prefix, kn), f"missing required key (speed as {kn} or {mps})")
     return None
 
 
-def _leg(r: _Reader, raw: Any, prefix: str, speed: float) -> tuple[Leg, float]:
+def _leg(r: TomlReader, raw: Any, prefix: str, speed: float) -> tuple[Leg, float]:
     """Parse one leg; returns it and the speed at its end."""
     tab = r.table(raw, prefix)
     kind = r.string(tab, prefix, "type")
     if kind not in _LEG_KEYS:
         raise r.error(
-            _join(prefix, "type"), f"unknown leg type {kind!r}; use one of {', '.join(_LEG_KEYS)}"
+            join_key(prefix, "type"),
+            f"unknown leg type {kind!r}; use one of {', '.join(_LEG_KEYS)}",
         )
     r.check_keys(tab, prefix, _LEG_KEYS[kind])
     climb = r.number(tab, prefix, "climb_rate_mps", default=0.0)
@@ -497,13 +386,13 @@ def _leg(r: _Reader, raw: Any, prefix: str, speed: float) -> tuple[Leg, float]:
         given = [k for k in ("turn_rate_dps", "angle_deg", "duration_s", "g") if k in tab]
         if "g" in tab:
             if set(given) != {"g", "angle_deg"}:
-                raise r.error(_join(prefix, "g"), "a g-load turn needs exactly g and angle_deg")
-            g = r.req(tab, prefix, "g", positive=True)
+                raise r.error(join_key(prefix, "g"), "a g-load turn needs exactly g and angle_deg")
+            g = r.req(tab, prefix, "g", positive=True, maximum=100.0)
             if speed <= 0:
-                raise r.error(_join(prefix, "g"), "a g-load turn needs a non-zero speed")
+                raise r.error(join_key(prefix, "g"), "a g-load turn needs a non-zero speed")
             angle = r.req(tab, prefix, "angle_deg") * deg
             if angle == 0:
-                raise r.error(_join(prefix, "angle_deg"), "turn angle must be non-zero")
+                raise r.error(join_key(prefix, "angle_deg"), "turn angle must be non-zero")
             leg = Leg.turn_g(angle, g, speed)
         elif len(given) != 2:
             raise r.error(
@@ -526,6 +415,8 @@ def _leg(r: _Reader, raw: Any, prefix: str, speed: float) -> tuple[Leg, float]:
             dur = r.req(tab, prefix, "duration_s", positive=True)
             leg = Leg(dur, turn_rate=r.req(tab, prefix, "angle_deg") * deg / dur)
         leg = Leg(leg.duration, turn_rate=leg.turn_rate, climb_rate=climb)
+    if leg.duration > MAX_TIME_S:
+        raise r.error(prefix, f"this leg lasts {leg.duration:.3g} s; at most {MAX_TIME_S:g} s")
     end = speed + leg.accel * leg.duration
     if end < -1e-9:
         raise r.error(prefix, f"this leg makes the speed negative ({end:.3f} m/s)")
@@ -533,13 +424,13 @@ def _leg(r: _Reader, raw: Any, prefix: str, speed: float) -> tuple[Leg, float]:
 
 
 def _position(
-    r: _Reader, tab: Mapping[str, Any], prefix: str, origin: tuple[float, float, float] | None
+    r: TomlReader, tab: Mapping[str, Any], prefix: str, origin: tuple[float, float, float] | None
 ) -> FloatArray:
     has_xy = "position_m" in tab
     has_ll = "lat_deg" in tab or "lon_deg" in tab
     if has_xy and has_ll:
         raise r.error(
-            _join(prefix, "position_m"), "give either position_m or lat_deg/lon_deg, not both"
+            join_key(prefix, "position_m"), "give either position_m or lat_deg/lon_deg, not both"
         )
     if has_ll:
         lat = r.req(tab, prefix, "lat_deg", minimum=-90.0, maximum=90.0)
@@ -547,22 +438,26 @@ def _position(
         alt = r.number(tab, prefix, "alt_m", default=0.0)
         if origin is None:
             raise r.error(
-                _join(prefix, "lat_deg"),
+                join_key(prefix, "lat_deg"),
                 "lat/lon positions need a top-level origin = { lat_deg, lon_deg }",
             )
         return np.asarray(geodetic_to_enu(lat, lon, alt or 0.0, *origin), dtype=np.float64)
     if "alt_m" in tab:
         raise r.error(
-            _join(prefix, "alt_m"), "alt_m goes with lat_deg/lon_deg; use a 3-element position_m"
+            join_key(prefix, "alt_m"), "alt_m goes with lat_deg/lon_deg; use a 3-element position_m"
         )
     if has_xy:
         p = r.vector(tab, prefix, "position_m", (2, 3))
         return np.concatenate([p, np.zeros(3 - p.size)])
-    raise r.error(_join(prefix, "position_m"), "missing required key (or lat_deg/lon_deg)")
+    raise r.error(join_key(prefix, "position_m"), "missing required key (or lat_deg/lon_deg)")
 
 
 def _platform(
-    r: _Reader, raw: Any, prefix: str, default_name: str, origin: tuple[float, float, float] | None
+    r: TomlReader,
+    raw: Any,
+    prefix: str,
+    default_name: str,
+    origin: tuple[float, float, float] | None,
 ) -> Platform:
     tab = r.table(raw, prefix)
     r.check_keys(tab, prefix, _PLATFORM_KEYS)
@@ -574,33 +469,33 @@ def _platform(
     legs_raw = tab.get("legs", [])
     if not isinstance(legs_raw, list):
         raise r.error(
-            _join(prefix, "legs"), f"expected a list of leg tables, got {_kind(legs_raw)}"
+            join_key(prefix, "legs"), f"expected a list of leg tables, got {describe(legs_raw)}"
         )
     legs = []
     v = speed
     for i, lr in enumerate(legs_raw):
-        leg, v = _leg(r, lr, f"{_join(prefix, 'legs')}[{i}]", v)
+        leg, v = _leg(r, lr, f"{join_key(prefix, 'legs')}[{i}]", v)
         legs.append(leg)
     return Platform(name, start, course, speed, tuple(legs))
 
 
-def _sensor(r: _Reader, raw: Any, prefix: str, index: int, duration: float) -> SensorConfig:
+def _sensor(r: TomlReader, raw: Any, prefix: str, index: int, duration: float) -> SensorConfig:
     tab = r.table(raw, prefix)
     r.check_keys(tab, prefix, _SENSOR_KEYS)
     name = r.string(tab, prefix, "name", default=f"sensor{index + 1}")
     kind = r.string(tab, prefix, "type")
     if kind not in SENSOR_TYPES:
         raise r.error(
-            _join(prefix, "type"),
+            join_key(prefix, "type"),
             f"unknown sensor type {kind!r}; use one of {', '.join(SENSOR_TYPES)}",
         )
     allowed, default = SENSOR_TYPES[kind]
     comps: tuple[str, ...] = default
     if "components" in tab:
         raw_c = tab["components"]
-        kp = _join(prefix, "components")
+        kp = join_key(prefix, "components")
         if not isinstance(raw_c, list) or not raw_c or not all(isinstance(c, str) for c in raw_c):
-            raise r.error(kp, f"expected a non-empty list of strings, got {_kind(raw_c)}")
+            raise r.error(kp, f"expected a non-empty list of strings, got {describe(raw_c)}")
         names = ["azimuth" if c == "bearing" else c for c in raw_c]
         for c in names:
             if c not in allowed:
@@ -614,88 +509,100 @@ def _sensor(r: _Reader, raw: Any, prefix: str, index: int, duration: float) -> S
             if c not in names:
                 raise r.error(kp, f"a {kind} must measure {', '.join(default)}")
         comps = tuple(c for c in _ORDER if c in names)
-    sig_tab = r.table(tab.get("sigma"), _join(prefix, "sigma")) if "sigma" in tab else None
+    sig_tab = r.table(tab.get("sigma"), join_key(prefix, "sigma")) if "sigma" in tab else None
     if sig_tab is None:
         raise r.error(
-            _join(prefix, "sigma"), "missing required key (a table of noise standard deviations)"
+            join_key(prefix, "sigma"), "missing required key (a table of noise standard deviations)"
         )
-    sp = _join(prefix, "sigma")
+    sp = join_key(prefix, "sigma")
     r.check_keys(sig_tab, sp, [_SIGMA_KEYS[c][0] for c in comps])
     sigma = tuple(
-        r.req(sig_tab, sp, _SIGMA_KEYS[c][0], minimum=0.0) * _SIGMA_KEYS[c][1] for c in comps
+        r.req(sig_tab, sp, _SIGMA_KEYS[c][0], positive=True) * _SIGMA_KEYS[c][1] for c in comps
     )
     eps = r.number(tab, prefix, "epsilon", default=0.0, minimum=0.0, maximum=1.0)
     scale_raw = tab.get("outlier_scale", 1.0)
-    op = _join(prefix, "outlier_scale")
+    op = join_key(prefix, "outlier_scale")
     if isinstance(scale_raw, dict):
         r.check_keys(scale_raw, op, [_SIGMA_KEYS[c][0] for c in comps])
         scale = tuple(
-            r.number(scale_raw, op, _SIGMA_KEYS[c][0], default=1.0, minimum=1.0) or 1.0
+            r.number(
+                scale_raw,
+                op,
+                _SIGMA_KEYS[c][0],
+                default=1.0,
+                minimum=1.0,
+                maximum=MAX_OUTLIER_SCALE,
+            )
+            or 1.0
             for c in comps
         )
     else:
-        s = r.number(tab, prefix, "outlier_scale", default=1.0, minimum=1.0)
+        s = r.number(
+            tab, prefix, "outlier_scale", default=1.0, minimum=1.0, maximum=MAX_OUTLIER_SCALE
+        )
         scale = (s or 1.0,) * len(comps)
     p_detect = r.number(tab, prefix, "p_detect", default=1.0, minimum=0.0, maximum=1.0)
     clutter = r.number(tab, prefix, "clutter_density", default=0.0, minimum=0.0)
     assert eps is not None and p_detect is not None and clutter is not None
     if kind == "passive_sonar" and clutter > 0:
         raise r.error(
-            _join(prefix, "clutter_density"), "clutter is simulated for active sensors only"
+            join_key(prefix, "clutter_density"), "clutter is simulated for active sensors only"
         )
     crange = (0.0, 0.0)
     if "clutter_range_m" in tab:
         cr = r.vector(tab, prefix, "clutter_range_m", (2,))
         if not 0 <= cr[0] < cr[1]:
             raise r.error(
-                _join(prefix, "clutter_range_m"), f"need 0 <= min < max, got {cr.tolist()}"
+                join_key(prefix, "clutter_range_m"), f"need 0 <= min < max, got {cr.tolist()}"
             )
         crange = (float(cr[0]), float(cr[1]))
     elif clutter > 0:
-        raise r.error(_join(prefix, "clutter_range_m"), "required when clutter_density > 0")
+        raise r.error(join_key(prefix, "clutter_range_m"), "required when clutter_density > 0")
     period = r.req(tab, prefix, "scan_period_s", positive=True)
     if period > duration:
         raise r.error(
-            _join(prefix, "scan_period_s"), f"longer than the scenario duration ({duration:g} s)"
+            join_key(prefix, "scan_period_s"), f"longer than the scenario duration ({duration:g} s)"
         )
     position = None
     platform = r.string(
         tab, prefix, "platform", default="ownship" if "position_m" not in tab else "fixed"
     )
     if platform not in ("ownship", "fixed"):
-        raise r.error(_join(prefix, "platform"), f"must be 'ownship' or 'fixed', got {platform!r}")
+        raise r.error(
+            join_key(prefix, "platform"), f"must be 'ownship' or 'fixed', got {platform!r}"
+        )
     if platform == "fixed":
         if "position_m" not in tab:
-            raise r.error(_join(prefix, "position_m"), "a fixed sensor needs position_m")
+            raise r.error(join_key(prefix, "position_m"), "a fixed sensor needs position_m")
         p = r.vector(tab, prefix, "position_m", (2, 3))
         position = np.concatenate([p, np.zeros(3 - p.size)])
     elif "position_m" in tab:
-        raise r.error(_join(prefix, "position_m"), "an own-ship sensor has no position_m")
+        raise r.error(join_key(prefix, "position_m"), "an own-ship sensor has no position_m")
     return SensorConfig(
         name, kind, comps, sigma, eps, scale, p_detect, clutter, crange, period, position
     )
 
 
-def _list_of_tables(r: _Reader, doc: Mapping[str, Any], key: str, required: bool) -> list[Any]:
+def _list_of_tables(r: TomlReader, doc: Mapping[str, Any], key: str, required: bool) -> list[Any]:
     if key not in doc:
         if required:
             raise r.error(key, f"missing required key (at least one [[{key}]] table)")
         return []
     v = doc[key]
     if not isinstance(v, list) or (required and not v):
-        raise r.error(key, f"expected a non-empty array of tables [[{key}]], got {_kind(v)}")
+        raise r.error(key, f"expected a non-empty array of tables [[{key}]], got {describe(v)}")
     return v
 
 
 def parse_scenario(doc: Mapping[str, Any], path: str = "<scenario>") -> Scenario:
     """Validate a parsed TOML document (see :func:`load_scenario`)."""
-    r = _Reader(path)
+    r = TomlReader(path)
     r.check_keys(doc, "", _TOP_KEYS)
     name = r.string(doc, "", "name", default=Path(path).stem)
     description = r.string(doc, "", "description", default="")
     duration = r.req(doc, "", "duration_s", positive=True)
     seed = r.integer(doc, "", "seed", 0, 0)
-    runs = r.integer(doc, "", "runs", 100, 1)
+    runs = r.integer(doc, "", "runs", 100, 1, MAX_RUNS)
     origin = None
     if "origin" in doc:
         ot = r.table(doc["origin"], "origin")
@@ -730,12 +637,61 @@ def parse_scenario(doc: Mapping[str, Any], path: str = "<scenario>") -> Scenario
     assert dt is not None
     if dt > duration:
         raise r.error("dt_s", f"longer than duration_s ({duration:g} s)")
-    extra: dict[str, Any] = {}
-    if "evaluate" in doc:
-        extra = dict(r.table(doc["evaluate"], "evaluate"))
-        for k, v in extra.items():
-            r.table(v, f"evaluate.{k}")  # one table of method parameters per method
+    _check_work(r, duration, dt, len(targets), sensors)
+    extra = _method_tables(r, doc.get("evaluate", {}))
     return Scenario(name, duration, dt, own, targets, sensors, seed, runs, description, path, extra)
+
+
+def _check_work(
+    r: TomlReader, duration: float, dt: float, n_targets: int, sensors: Sequence[SensorConfig]
+) -> None:
+    """Bound the memory and time one simulated run takes, before anything is allocated."""
+    total = 0
+    for i, s in enumerate(sensors):
+        n = math.floor(duration / s.scan_period + 1e-9) + 1
+        kp = f"sensors[{i}]"
+        if n > MAX_SAMPLES:
+            raise r.error(
+                f"{kp}.scan_period_s",
+                f"duration_s / scan_period_s gives {n:.3g} scans; at most {MAX_SAMPLES}",
+            )
+        if s.clutter_density * n > MAX_SAMPLES:
+            raise r.error(
+                f"{kp}.clutter_density",
+                f"{s.clutter_density:g} false plots per scan over {n} scans; at most "
+                f"{MAX_SAMPLES} in a run",
+            )
+        total += n * (n_targets + 1)
+    n_truth = math.floor(duration / dt + 1e-9) + 1
+    if n_truth > MAX_SAMPLES:
+        raise r.error(
+            "dt_s", f"duration_s / dt_s gives {n_truth:.3g} truth samples; at most {MAX_SAMPLES}"
+        )
+    total += n_truth * (n_targets + 1)
+    if total > MAX_POINTS:
+        raise r.error(
+            "duration_s",
+            f"{total:.3g} simulated samples in one run (truth and scans of {n_targets} "
+            f"target(s)); at most {MAX_POINTS}: shorten the scenario or lengthen the periods",
+        )
+
+
+def _method_tables(r: TomlReader, raw: Any) -> dict[str, Any]:
+    """``[evaluate.<method>]`` tables: known method names; finite numbers, strings, booleans."""
+    from seatrack.filters.registry import METHODS
+
+    extra = dict(r.table(raw, "evaluate"))
+    for m, tab in extra.items():
+        kp = f"evaluate.{m}"
+        if m not in METHODS:
+            raise r.error(kp, f"no track method {m!r}; known: {', '.join(METHODS)}")
+        for k, v in r.table(tab, kp).items():
+            if isinstance(v, (int, float)) and not isinstance(v, bool):
+                r.number(tab, kp, k)  # finite and within the unit limit of its name
+            elif not isinstance(v, (str, bool)):
+                raise r.error(join_key(kp, k), f"expected a number, string or boolean, got "
+                              f"{describe(v)}")  # fmt: skip
+    return extra
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -756,9 +712,13 @@ def load_scenario(path: str | Path) -> Scenario:
     except OSError as exc:
         raise InputError(f"{p}: cannot read scenario file ({exc.strerror})") from None
     try:
-        doc = tomllib.loads(text.decode("utf-8"))
+        doc = tomllib.loads(text.decode("utf-8-sig"))
     except UnicodeDecodeError as exc:
-        raise InputError(f"{p}: not a UTF-8 text file ({exc.reason} at byte {exc.start})") from None
+        line = text[: exc.start].count(b"\n") + 1
+        bad = text[exc.start : exc.start + 1].hex()
+        raise InputError(
+            f"{p}, line {line}: not UTF-8 text (byte 0x{bad}: {exc.reason}); TOML files are UTF-8"
+        ) from None
     except tomllib.TOMLDecodeError as exc:
         raise InputError(f"{p}: TOML syntax error: {exc}") from None
     try:

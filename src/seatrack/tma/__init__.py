@@ -1,4 +1,4 @@
-"""Bearings-only target motion analysis (spec ``specs/tma.md``, DE 3446658).
+"""Bearings-only target motion analysis (DE 3446658; method page ``docs/tma.md``).
 
 One obvious entry point, :func:`solve`::
 
@@ -7,24 +7,23 @@ One obvious entry point, :func:`solve`::
     sol.last.range, sol.last.sigma_range, sol.observable
 
 plus :func:`solve_many` (every contact in one vectorised call), :class:`TMATracker`
-(bearings one by one, warm-started), :func:`detect_legs` (leg changes from the data),
-:func:`crb` (Cramér–Rao bound for a true trajectory) and :func:`classic_scenario`.
+(bearings one by one, warm-started), :func:`detect_legs` (leg changes from the data) and
+:func:`crb` (Cramér–Rao bound for a true trajectory). Test scenarios are in
+:mod:`seatrack.simulate.tma`, the file formats in :mod:`seatrack.io.tma`, the plot in
+:mod:`seatrack.report.tma`.
+
+Module layering inside the package (each imports only those above it): ``legs``,
+``config`` -> ``support`` -> ``problem`` -> ``bounds``, ``lm`` -> ``start``, ``result`` ->
+``group`` -> ``detect`` -> ``solver`` -> ``tracker``.
 """
 
 from seatrack.tma.bounds import crb, ellipse, operator_values, position_crb
+from seatrack.tma.config import TMAConfig
 from seatrack.tma.detect import LegDetection, detect_legs
 from seatrack.tma.legs import leg_starts, leg_time_matrix
-from seatrack.tma.scenario import TMAScenario, classic_scenario, scenario_from_trajectories
-from seatrack.tma.solver import (
-    Bearings,
-    LastEstimate,
-    TMAConfig,
-    TMASolution,
-    bearing_residuals,
-    observer_deviation,
-    solve,
-    solve_many,
-)
+from seatrack.tma.problem import Bearings, bearing_residuals
+from seatrack.tma.result import LastEstimate, TMASolution, observer_deviation
+from seatrack.tma.solver import solve, solve_many
 from seatrack.tma.support import SupportValue, support_residuals
 from seatrack.tma.tracker import TMATracker
 
@@ -34,11 +33,9 @@ __all__ = [
     "LegDetection",
     "SupportValue",
     "TMAConfig",
-    "TMAScenario",
     "TMASolution",
     "TMATracker",
     "bearing_residuals",
-    "classic_scenario",
     "crb",
     "detect_legs",
     "ellipse",
@@ -47,7 +44,6 @@ __all__ = [
     "observer_deviation",
     "operator_values",
     "position_crb",
-    "scenario_from_trajectories",
     "solve",
     "solve_many",
     "support_residuals",

@@ -5,8 +5,9 @@
   the covariance of those values is ``G P G^T`` (first-order propagation).
 * :func:`crb` -- the Cramér–Rao bound of ``beta`` for a given true trajectory and
   measurement times: ``(J^T W J)^-1`` at the true state (spec "Beyond the patent": for
-  Gaussian bearing noise this is the CRLB of the batch problem), via
-  :func:`seatrack.evaluate.bounds.fisher_crb`.
+  Gaussian bearing noise this is the CRLB of the batch problem), inverted only after the
+  explicit scaled rank test of :mod:`seatrack.information` (a singular geometry raises
+  :class:`~seatrack.information.SingularMatrixError`, whatever the BLAS build).
 * :func:`position_crb` -- that bound mapped to the target position at a time.
 * :func:`ellipse` -- semi-axes and orientation of a confidence ellipse.
 
@@ -21,10 +22,12 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.stats import chi2
 
-from seatrack.evaluate.bounds import fisher_crb
 from seatrack.geometry import bearing, course_speed
+from seatrack.information import invert_jacobian_information
 from seatrack.models.measurement import bearing_jacobian
 from seatrack.tma.legs import leg_index, leg_starts, leg_time_matrix, position_map
+from seatrack.tma.problem import Bearings, Problem
+from seatrack.tma.support import SupportValue
 
 FloatArray = NDArray[np.float64]
 
@@ -79,7 +82,7 @@ def crb(
     observer: ArrayLike,
     sigma: float | ArrayLike,
     manoeuvres: Sequence[float] | ArrayLike = (),
-    support: Sequence[object] = (),
+    support: Sequence[SupportValue] = (),
     support_residual: str = "linear",
 ) -> FloatArray:
     """Cramér–Rao bound of the TMA state for a true trajectory and measurement times.
@@ -101,16 +104,16 @@ def crb(
 
     Raises
     ------
-    numpy.linalg.LinAlgError
-        If the Fisher information is singular (unobservable geometry).
+    seatrack.information.SingularMatrixError
+        (a :class:`numpy.linalg.LinAlgError`) if the whitened Jacobian is rank-deficient by
+        the explicit scaled test (unobservable geometry, e.g. no own-ship manoeuvre and no
+        support value).
     """
-    from seatrack.tma.solver import TMAConfig, _Problem
-
+    if support_residual not in ("linear", "square"):
+        raise ValueError(f"support_residual must be 'linear' or 'square', got {support_residual!r}")
     t = np.asarray(times, dtype=float)
     obs = np.asarray(observer, dtype=float)[:, :2]
     sig = np.broadcast_to(np.asarray(sigma, dtype=float), t.shape)
-    from seatrack.tma.solver import Bearings
-
     b = np.asarray(state, dtype=float)
     starts = leg_starts(float(t[0]), manoeuvres)
     if b.size != 2 + 2 * starts.size:
@@ -121,24 +124,28 @@ def crb(
     C = leg_time_matrix(t, starts)
     p = C @ b.reshape(-1, 2)
     z = bearing(p[:, 0] - obs[:, 0], p[:, 1] - obs[:, 1])
-    prob = _Problem.build(
-        Bearings(t, np.asarray(z), obs, np.array(sig)),
-        list(support),  # type: ignore[arg-type]
-        starts,
-        TMAConfig(support_residual=support_residual),
-    )
+    bearings = Bearings(t, np.asarray(z), obs, np.array(sig))
+    prob = Problem.build(bearings, list(support), starts, 1.0, support_residual == "square")
     _, J = prob.evaluate(b)
-    return fisher_crb(J, prob.weights)
+    return invert_jacobian_information(J, prob.weights, "TMA Fisher information")
 
 
 def position_crb(bound: ArrayLike, starts: ArrayLike, t: float) -> FloatArray:
     """Map a state covariance/bound ``(n, n)`` to the target position at time ``t`` (2, 2).
 
     Position is linear in ``beta`` (``p(t) = M(t) beta``), so the map is exact: ``M P M^T``.
+    No inverse is involved; a bound that is not finite (the NaN covariance of a singular
+    geometry) or not square of the state size is a :class:`ValueError`.
     """
-    M = position_map(leg_time_matrix(np.array([t]), np.asarray(starts, dtype=float))[0])
+    s = np.asarray(starts, dtype=float)
     P = np.asarray(bound, dtype=float)
-    return M @ P @ M.T
+    n = 2 + 2 * s.size
+    if P.shape != (n, n):
+        raise ValueError(f"bound has shape {P.shape}; {s.size} legs need ({n}, {n})")
+    if not np.all(np.isfinite(P)):
+        raise ValueError("bound is not finite (singular geometry: the state is not observable)")
+    M = position_map(leg_time_matrix(np.array([t]), s)[0])
+    return np.asarray(M @ P @ M.T)
 
 
 def ellipse(cov: ArrayLike, p: float = 0.95) -> tuple[float, float, float]:

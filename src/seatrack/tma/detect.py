@@ -29,22 +29,21 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.tma.config import TMAConfig
+from seatrack.tma.group import Item, solve_group
 from seatrack.tma.legs import leg_index, leg_starts
-from seatrack.tma.solver import (
-    Bearings,
-    TMAConfig,
-    TMASolution,
-    _auto_start,
-    _lm,
-    _Problem,
-    _solve_group,
-    solve,
-)
+from seatrack.tma.lm import levenberg_marquardt
+from seatrack.tma.problem import Bearings, Problem
+from seatrack.tma.result import TMASolution
+from seatrack.tma.start import auto_start
 from seatrack.tma.support import SupportValue
 
 FloatArray = NDArray[np.float64]
 
 __all__ = ["LegDetection", "detect_legs"]
+
+#: a candidate: (manoeuvre times, initial state)
+Candidate = tuple[list[float], FloatArray]
 
 
 @dataclass(frozen=True)
@@ -65,6 +64,18 @@ class LegDetection:
     penalty: float
 
 
+@dataclass(frozen=True)
+class _Best:
+    """Best candidate of a batch: times, cost, state, LM trials on its path, and its
+    position in the batch's candidate list."""
+
+    times: list[float]
+    cost: float
+    beta: FloatArray
+    iterations: int
+    index: int = 0
+
+
 def _split(beta: FloatArray, starts: FloatArray, t_new: float) -> FloatArray:
     """State for one more leg starting at ``t_new``: the split leg's velocity duplicated."""
     B = beta.reshape(-1, 2)
@@ -72,55 +83,60 @@ def _split(beta: FloatArray, starts: FloatArray, t_new: float) -> FloatArray:
     return np.concatenate([B[: 2 + j], B[1 + j : 2 + j], B[2 + j :]]).reshape(-1)
 
 
-def _best_of(
-    bearings: Bearings,
-    support: Sequence[SupportValue],
-    sigma: float | None,
-    cfg: TMAConfig,
-    candidates: list[tuple[list[float], FloatArray]],
-    auto: bool = True,
-) -> tuple[int, float, FloatArray]:
-    """Solve every (manoeuvre times, initial state) candidate in one batch; best index."""
-    t0 = float(bearings.t[0])
-    starts = [leg_starts(t0, m) for m, _ in candidates]
-    probs = [_Problem.build(bearings, support, s, cfg, sigma) for s in starts]
-    warm = np.stack([b for _, b in candidates])
-    if auto:  # each candidate also from the automatic start (the warm start may be far off)
-        fresh = _auto_start([(bearings, support, s, None) for s in starts], cfg, sigma)
-        warm = np.concatenate([warm, fresh])
-        probs = probs + probs
-    res = _lm(_Problem.stack(probs), warm, cfg, cfg.max_iterations)
-    cost = np.where(np.isfinite(res.cost), res.cost, np.inf)
-    k = int(np.argmin(cost))
-    return k % len(candidates), float(cost[k]), res.beta[k]
+class _Search:
+    """Batched candidate solves of one contact; counts every LM trial in ``total``."""
 
+    def __init__(
+        self, bearings: Bearings, support: Sequence[SupportValue], sigma: float, cfg: TMAConfig
+    ) -> None:
+        self.bearings, self.support, self.sigma, self.cfg = bearings, support, sigma, cfg
+        self.total = 0
 
-def _scan(
-    index: list[int],
-    make: Callable[[int], tuple[list[float], FloatArray]],
-    solve_batch: Callable[[list[tuple[list[float], FloatArray]]], tuple[int, float, FloatArray]],
-    max_candidates: int,
-) -> tuple[list[float], float, FloatArray]:
-    """Best candidate over bearing indices ``index``: all of them if there are at most
-    ``max_candidates``, else a coarse evenly spaced subset and then every index between the
-    best coarse candidate's neighbours."""
-    if len(index) <= max_candidates:
-        cands = [make(i) for i in index]
-        k, c, b = solve_batch(cands)
-        return cands[k][0], c, b
-    step = math.ceil(len(index) / max_candidates)
-    coarse = index[::step]
-    cands = [make(i) for i in coarse]
-    k, c, b = solve_batch(cands)
-    best = (cands[k][0], c, b)
-    pos = index.index(coarse[k])
-    fine = [i for i in index[max(0, pos - step + 1) : pos + step] if i != coarse[k]]
-    if fine:
-        cands = [make(i) for i in fine]
-        k, c2, b2 = solve_batch(cands)
-        if c2 < c:
-            best = (cands[k][0], c2, b2)
-    return best
+    def best_of(self, candidates: list[Candidate], auto: bool) -> _Best:
+        """Solve every (manoeuvre times, initial state) candidate in one batch; the best.
+
+        With ``auto`` each candidate is also solved from the automatic start (the warm
+        start may be far off)."""
+        b, cfg = self.bearings, self.cfg
+        t0 = float(b.t[0])
+        starts = [leg_starts(t0, m) for m, _ in candidates]
+        square = cfg.support_residual == "square"
+        probs = [Problem.build(b, self.support, s, self.sigma, square) for s in starts]
+        warm = np.stack([beta for _, beta in candidates])
+        pre = np.zeros(len(candidates), dtype=np.int64)
+        if auto:
+            found = auto_start([(b, self.support, s) for s in starts], cfg, self.sigma)
+            warm = np.concatenate([warm, found.beta])
+            pre = np.concatenate([pre, found.iterations])
+            probs = probs + probs
+            self.total += int(found.iterations_total.sum())
+        res = levenberg_marquardt(Problem.stack(probs), warm, cfg, cfg.max_iterations)
+        self.total += int(res.iterations.sum())
+        cost = np.where(np.isfinite(res.cost), res.cost, np.inf)
+        k = int(np.argmin(cost))
+        j = k % len(candidates)
+        return _Best(
+            candidates[j][0], float(cost[k]), res.beta[k], int(pre[k] + res.iterations[k]), j
+        )
+
+    def scan(
+        self, index: list[int], make: Callable[[int], Candidate], auto: bool, max_candidates: int
+    ) -> _Best:
+        """Best candidate over bearing indices ``index``: all of them if there are at most
+        ``max_candidates``, else a coarse evenly spaced subset and then every index between
+        the best coarse candidate's neighbours."""
+        if len(index) <= max_candidates:
+            return self.best_of([make(i) for i in index], auto)
+        step = math.ceil(len(index) / max_candidates)
+        coarse = index[::step]
+        best = self.best_of([make(i) for i in coarse], auto)
+        at = index.index(coarse[best.index])
+        fine = [i for i in index[max(0, at - step + 1) : at + step] if i != coarse[best.index]]
+        if fine:
+            b2 = self.best_of([make(i) for i in fine], auto)
+            if b2.cost < best.cost:
+                best = b2
+        return best
 
 
 def detect_legs(
@@ -145,17 +161,23 @@ def detect_legs(
     max_passes : passes of the change-time re-placement after each accepted leg.
     max_candidates : candidate change times solved in one batch; with more bearings a
         coarse evenly spaced scan is refined around its best candidate.
+
+    The solution's ``iterations`` are the LM trials on the path of the chosen model (its
+    start, the candidate solve that produced it, the final refinement); ``iterations_total``
+    counts every trial of the whole search.
     """
     cfg = config or TMAConfig()
     sup = list(support or [])
+    sig = cfg.sigma if sigma is None else float(sigma)
     t = bearings.t
     N = t.size
     pen = 3.0 * math.log(N) if penalty is None else float(penalty)
-    sol = solve(bearings, sup, None, sigma, None, cfg)
-    times: list[float] = []
-    beta, cost = sol.state, sol.cost
-    costs = [cost]
     t0 = float(t[0])
+    one = solve_group([Item(bearings, sup, leg_starts(t0, ()))], cfg, sig)[0]
+    search = _Search(bearings, sup, sig, cfg)
+    search.total = one.iterations_total
+    best = _Best([], one.cost, one.state, one.iterations)
+    costs = [one.cost]
 
     def allowed(i: int, others: list[float]) -> bool:
         if i < min_leg_bearings or i > N - min_leg_bearings:
@@ -163,51 +185,58 @@ def detect_legs(
         idx = np.searchsorted(t, others)
         return bool(np.all(np.abs(idx - i) >= min_leg_bearings))
 
-    def batch(
-        auto: bool,
-    ) -> Callable[[list[tuple[list[float], FloatArray]]], tuple[int, float, FloatArray]]:
-        return lambda cands: _best_of(bearings, sup, sigma, cfg, cands, auto=auto)
-
     for _ in range(max_legs - 1):
-        starts = leg_starts(t0, times)
-        index = [i for i in range(N) if allowed(i, times)]
+        index = [i for i in range(N) if allowed(i, best.times)]
         if not index:
             break
+        cur = best
+        starts = leg_starts(t0, cur.times)
 
-        def split_at(
-            i: int, times: list[float] = times, beta: FloatArray = beta, starts: FloatArray = starts
-        ) -> tuple[list[float], FloatArray]:
-            return sorted(times + [float(t[i])]), _split(beta, starts, float(t[i]))
+        def split_at(i: int, cur: _Best = cur, starts: FloatArray = starts) -> Candidate:
+            return sorted(cur.times + [float(t[i])]), _split(cur.beta, starts, float(t[i]))
 
-        m_new, c_new, b_new = _scan(index, split_at, batch(True), max_candidates)
-        if not cost - c_new > pen:
-            costs.append(c_new)
+        new = search.scan(index, split_at, True, max_candidates)
+        if not cur.cost - new.cost > pen:
+            costs.append(new.cost)
             break
-        times, beta, cost = m_new, b_new, c_new
-        # re-place each change time with the others held fixed, until nothing moves
-        for _pass in range(max_passes):
-            moved = False
-            for j in range(len(times)):
-                others = times[:j] + times[j + 1 :]
-                lo = times[j - 1] if j > 0 else -math.inf
-                hi = times[j + 1] if j + 1 < len(times) else math.inf
-                # candidates stay between the neighbours, which keeps the leg order of beta
-                index = [i for i in range(N) if lo < t[i] < hi and allowed(i, others)]
-                if len(index) < 2:
-                    continue
+        best = _replace_times(search, new, t, allowed, max_passes, max_candidates)
+        costs.append(best.cost)
+    final = solve_group(
+        [Item(bearings, sup, leg_starts(t0, best.times), best.beta, best.iterations,
+              search.total, detected=True)],
+        cfg, sig,
+    )[0]  # fmt: skip
+    return LegDetection(np.asarray(best.times, dtype=float), final, tuple(costs), pen)
 
-                def move_to(
-                    i: int, others: list[float] = others, beta: FloatArray = beta
-                ) -> tuple[list[float], FloatArray]:
-                    return sorted(others + [float(t[i])]), beta.copy()
 
-                m_j, c_j, b_j = _scan(index, move_to, batch(False), max_candidates)
-                if c_j < cost - 1e-9 * cost:
-                    moved = moved or m_j != times
-                    times, beta, cost = m_j, b_j, c_j
-            if not moved:
-                break
-        costs.append(cost)
-    starts = leg_starts(t0, times)
-    final = _solve_group([(bearings, sup, starts, beta)], cfg, sigma, detected=[True])[0]
-    return LegDetection(np.asarray(times, dtype=float), final, tuple(costs), pen)
+def _replace_times(
+    search: _Search,
+    best: _Best,
+    t: FloatArray,
+    allowed: Callable[[int, list[float]], bool],
+    max_passes: int,
+    max_candidates: int,
+) -> _Best:
+    """Re-place each change time with the others held fixed, until nothing moves."""
+    for _pass in range(max_passes):
+        moved = False
+        for j in range(len(best.times)):
+            times = best.times
+            others = times[:j] + times[j + 1 :]
+            lo = times[j - 1] if j > 0 else -math.inf
+            hi = times[j + 1] if j + 1 < len(times) else math.inf
+            # candidates stay between the neighbours, which keeps the leg order of beta
+            index = [i for i in range(t.size) if lo < t[i] < hi and allowed(i, others)]
+            if len(index) < 2:
+                continue
+
+            def move_to(i: int, others: list[float] = others, cur: _Best = best) -> Candidate:
+                return sorted(others + [float(t[i])]), cur.beta.copy()
+
+            cand = search.scan(index, move_to, False, max_candidates)
+            if cand.cost < best.cost - 1e-9 * best.cost:
+                moved = moved or cand.times != best.times
+                best = cand
+        if not moved:
+            break
+    return best

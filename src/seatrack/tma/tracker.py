@@ -14,7 +14,10 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike
 
-from seatrack.tma.solver import Bearings, TMAConfig, TMASolution, solve
+from seatrack.tma.config import TMAConfig
+from seatrack.tma.problem import Bearings
+from seatrack.tma.result import TMASolution
+from seatrack.tma.solver import solve
 from seatrack.tma.support import SupportValue
 
 __all__ = ["TMATracker"]

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from seatrack.geometry import knots_to_mps, velocity_from_course
 from seatrack.simulate import Leg, Measurements, NoiseModel, Trajectory, observe, trajectory
 from seatrack.tma.legs import leg_starts
-from seatrack.tma.solver import Bearings
+from seatrack.tma.problem import Bearings
 
 FloatArray = NDArray[np.float64]
 

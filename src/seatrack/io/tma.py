@@ -1,7 +1,7 @@
 """BEARINGS.csv / SUPPORT.csv readers and the RESULT.json writer of ``seatrack tma``.
 
-File formats (issue 3; header names exact, extra columns allowed)
------------------------------------------------------------------
+File formats (header names exact, extra columns allowed; ``docs/formats.md``)
+-----------------------------------------------------------------------------
 BEARINGS.csv: ``contact`` (optional; default one contact ``"1"``), ``time_s``,
 ``bearing_deg`` (true, clockwise from North, in [0, 360)), ``observer_x_m``,
 ``observer_y_m`` (East, North), optional ``sigma_deg`` (empty cell = the default sigma).
@@ -11,29 +11,71 @@ SUPPORT.csv: ``contact`` (optional), ``kind`` (range | speed | course), ``time_s
 ``value`` (m, m/s or deg), ``sigma`` (same unit), ``observer_x_m``, ``observer_y_m``
 (required for a range; optional columns otherwise).
 
-RESULT.json: an object keyed by contact id; see :func:`solution_to_dict`.
+Values must be finite (checked by :func:`seatrack.io.table.read_csv_table`) and plausible:
+``|time_s| <= 1e10`` s, ``|observer_*| <= 1e8`` m, bearing sigma in (0, 180) deg, a range in
+(0, 1e8] m, a speed in (0, 1000] m/s, a course in [0, 360) deg, each support sigma positive
+and at most the largest value of its kind (180 deg for a course).
+
+RESULT.json: an object keyed by contact id; see :func:`solution_to_dict`. Always valid JSON:
+numbers that are not determined are ``null`` (:func:`result_json`, never NaN or Infinity).
 
 Every error names the file, the line (header = line 1) and the problem.
 """
 
 from __future__ import annotations
 
+import json
 import math
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from seatrack.geometry import bearing_rad_to_deg, deg2rad
-from seatrack.io.table import InputError, check_times, read_csv_table
+from seatrack.io.table import InputError, Table, check_times, read_csv_table
 from seatrack.tma.bounds import ellipse
-from seatrack.tma.solver import Bearings, TMASolution
+from seatrack.tma.problem import Bearings
+from seatrack.tma.result import TMASolution
 from seatrack.tma.support import KINDS, SupportValue
 
-__all__ = ["DEFAULT_CONTACT", "read_bearings", "read_support", "solution_to_dict"]
+__all__ = [
+    "DEFAULT_CONTACT",
+    "LIMITS",
+    "read_bearings",
+    "read_support",
+    "result_json",
+    "solution_summary",
+    "solution_to_dict",
+]
 
 #: contact id used when BEARINGS.csv / SUPPORT.csv have no ``contact`` column
 DEFAULT_CONTACT = "1"
+
+#: plausibility limits of the input values (SI units; angles in degrees as in the files)
+LIMITS = {
+    "time_s": 1e10,
+    "position_m": 1e8,
+    "sigma_deg": 180.0,
+    "range_m": 1e8,
+    "speed_mps": 1000.0,
+}
+
+#: largest plausible value and sigma of each support kind (unit of the file)
+_SUPPORT_MAX = {"range": LIMITS["range_m"], "speed": LIMITS["speed_mps"], "course": 180.0}
+
+
+def _check_abs(tab: Table, path: str, column: str, limit: float, unit: str) -> None:
+    if column not in tab:
+        return
+    v = tab[column]
+    bad = np.flatnonzero(np.abs(np.where(np.isnan(v), 0.0, v)) > limit)
+    if bad.size:
+        i = bad[0]
+        raise InputError(
+            f"{path}, line {tab.lines[i]}: {column} = {v[i]:g} is implausible "
+            f"(|{column}| must be at most {limit:g} {unit})"
+        )
 
 
 def _contacts(table: Any, path: str) -> np.ndarray:
@@ -57,8 +99,9 @@ def read_bearings(
     Raises
     ------
     InputError
-        Missing columns, non-numeric / NaN / infinite cells, bearings outside [0, 360),
-        non-positive sigma, unsorted or duplicate times, a contact with a single bearing.
+        Missing columns, non-numeric / NaN / infinite cells, implausible values (see the
+        module docstring), bearings outside [0, 360), sigma outside (0, 180) deg, unsorted
+        or duplicate times, a contact with a single bearing.
     """
     p = str(path)
     tab = read_csv_table(
@@ -74,10 +117,15 @@ def read_bearings(
         i = bad[0]
         raise InputError(f"{p}, line {tab.lines[i]}: bearing_deg = {b[i]:g} is outside [0, 360)")
     sig = tab["sigma_deg"] if "sigma_deg" in tab else np.full(len(tab), np.nan)
-    bad = np.flatnonzero(sig <= 0)
+    bad = np.flatnonzero((sig <= 0) | (sig >= LIMITS["sigma_deg"]))
     if bad.size:
         i = bad[0]
-        raise InputError(f"{p}, line {tab.lines[i]}: sigma_deg = {sig[i]:g} must be positive")
+        raise InputError(
+            f"{p}, line {tab.lines[i]}: sigma_deg = {sig[i]:g} must be in (0, 180) degrees"
+        )
+    _check_abs(tab, p, "time_s", LIMITS["time_s"], "s")
+    for c in ("observer_x_m", "observer_y_m"):
+        _check_abs(tab, p, c, LIMITS["position_m"], "m")
     tab.columns["contact"] = cid
     check_times(tab, "time_s", group="contact", strict=True)
     out: dict[str, Bearings] = {}
@@ -98,8 +146,43 @@ def read_bearings(
     return out
 
 
+def _support_value(
+    where: str, kind: str, t: float, val: float, sig: float, ox: float, oy: float
+) -> SupportValue:
+    """One validated support value (file units in, SI/radians out)."""
+    top = _SUPPORT_MAX[kind]
+    unit = {"range": "m", "speed": "m/s", "course": "deg"}[kind]
+    if abs(t) > LIMITS["time_s"]:
+        raise InputError(f"{where}: time_s = {t:g} is implausible (|time_s| <= 1e+10 s)")
+    if not 0 < sig <= top:
+        raise InputError(f"{where}: sigma = {sig:g} must be in (0, {top:g}] {unit}")
+    obs = None
+    if kind == "range":
+        if not (math.isfinite(ox) and math.isfinite(oy)):
+            raise InputError(f"{where}: a range support value needs observer_x_m and observer_y_m")
+        if max(abs(ox), abs(oy)) > LIMITS["position_m"]:
+            raise InputError(
+                f"{where}: observer position ({ox:g}, {oy:g}) is implausible (|x|, |y| <= 1e+08 m)"
+            )
+        obs = (float(ox), float(oy))
+    if kind == "course":
+        if not 0 <= val < 360:
+            raise InputError(f"{where}: course value = {val:g} is outside [0, 360)")
+        val, sig = math.radians(val), math.radians(sig)
+    elif not 0 < val <= top:
+        raise InputError(f"{where}: {kind} value = {val:g} must be in (0, {top:g}] {unit}")
+    return SupportValue(kind, t, val, sig, obs)
+
+
 def read_support(path: str | Path) -> dict[str, list[SupportValue]]:
-    """Read SUPPORT.csv into support values per contact (SI units, radians inside)."""
+    """Read SUPPORT.csv into support values per contact (SI units, radians inside).
+
+    Raises
+    ------
+    InputError
+        Missing columns, non-numeric / NaN / infinite cells, an unknown kind, implausible
+        values (module docstring), a range without the observer position.
+    """
     p = str(path)
     tab = read_csv_table(
         path,
@@ -112,33 +195,17 @@ def read_support(path: str | Path) -> dict[str, list[SupportValue]]:
     oy = tab["observer_y_m"] if "observer_y_m" in tab else np.full(len(tab), np.nan)
     out: dict[str, list[SupportValue]] = {}
     for i in range(len(tab)):
-        line = tab.lines[i]
+        where = f"{p}, line {tab.lines[i]}"
         kind = str(tab["kind"][i]).strip().lower()
-        val, sig, t = float(tab["value"][i]), float(tab["sigma"][i]), float(tab["time_s"][i])
-        where = f"{p}, line {line}"
         if kind not in KINDS:
             raise InputError(
                 f"{where}: kind = {str(tab['kind'][i])!r}; use one of {', '.join(KINDS)}"
             )
-        if sig <= 0:
-            raise InputError(f"{where}: sigma = {sig:g} must be positive")
-        obs = None
-        if kind == "range":
-            if not (math.isfinite(ox[i]) and math.isfinite(oy[i])):
-                raise InputError(
-                    f"{where}: a range support value needs observer_x_m and observer_y_m"
-                )
-            obs = (float(ox[i]), float(oy[i]))
-            if val <= 0:
-                raise InputError(f"{where}: range value = {val:g} must be positive")
-        elif kind == "speed":
-            if val <= 0:
-                raise InputError(f"{where}: speed value = {val:g} must be positive")
-        else:
-            if not 0 <= val < 360:
-                raise InputError(f"{where}: course value = {val:g} is outside [0, 360)")
-            val, sig = math.radians(val), math.radians(sig)
-        out.setdefault(str(cid[i]), []).append(SupportValue(kind, t, val, sig, obs))
+        v = _support_value(
+            where, kind, float(tab["time_s"][i]), float(tab["value"][i]), float(tab["sigma"][i]),
+            float(ox[i]), float(oy[i]),
+        )  # fmt: skip
+        out.setdefault(str(cid[i]), []).append(v)
     return out
 
 
@@ -147,18 +214,41 @@ def _num(x: Any) -> float | None:
     return v if math.isfinite(v) else None
 
 
+def _json_safe(obj: Any) -> Any:
+    """Plain JSON types: non-finite floats -> None, numpy scalars/arrays -> Python."""
+    if isinstance(obj, Mapping):
+        return {str(k): _json_safe(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple, np.ndarray)):
+        return [_json_safe(v) for v in obj]
+    if isinstance(obj, (bool, np.bool_)):
+        return bool(obj)
+    if isinstance(obj, (int, np.integer)):
+        return int(obj)
+    if isinstance(obj, (float, np.floating)):
+        return _num(obj)
+    return obj
+
+
+def result_json(solutions: Mapping[str, TMASolution]) -> str:
+    """RESULT.json text of every contact: valid JSON (``null``, never NaN or Infinity)."""
+    doc = {cid: solution_to_dict(s) for cid, s in solutions.items()}
+    return json.dumps(_json_safe(doc), indent=2, allow_nan=False) + "\n"
+
+
 def solution_to_dict(sol: TMASolution) -> dict[str, Any]:
     """RESULT.json entry of one contact (degrees and SI units; ``null`` = not determined).
 
     Fields: ``t0_s``; ``x_m, y_m, vx_mps, vy_mps`` (target at ``t0``, first leg); ``legs``
     (``start_s, vx_mps, vy_mps``); ``covariance`` with ``state_order``; ``last`` (time,
     position, range, bearing, course, speed, their 1-sigma and half-widths of the
-    ``confidence`` interval, and the position ellipse); ``iterations``, ``converged``,
-    ``observable``, ``condition_number``, ``smallest_singular_value``,
+    ``confidence`` interval, and the position ellipse); ``iterations`` (LM trials from the
+    chosen start value to convergence), ``iterations_total`` (over every start tried),
+    ``converged``, ``observable``, ``condition_number``, ``smallest_singular_value``,
     ``residual_rms_deg``, ``cost``, ``manoeuvres_s``, ``manoeuvres_detected``,
-    ``warnings``. When not observable every range-dependent number is ``null``.
+    ``warnings``. Unless the solution is observable *and* converged every
+    range-dependent number (state, covariance, operator values) is ``null``.
     """
-    ok = sol.observable
+    ok = sol.valid
     B = sol.state.reshape(-1, 2)
     L = sol.last
     zf = L.z_factor
@@ -205,15 +295,35 @@ def solution_to_dict(sol: TMASolution) -> dict[str, Any]:
         "covariance": [[_num(v) for v in row] for row in sol.covariance] if ok else None,
         "last": last,
         "iterations": sol.iterations,
+        "iterations_total": sol.iterations_total,
         "converged": sol.converged,
-        "observable": ok,
+        "observable": sol.observable,
         "condition_number": _num(sol.condition_number),
         "smallest_singular_value": _num(sol.smallest_singular_value),
-        "residual_rms_deg": math.degrees(sol.residual_rms),
-        "cost": sol.cost,
+        "residual_rms_deg": _num(math.degrees(sol.residual_rms)),
+        "cost": _num(sol.cost),
         "n_bearings": sol.n_bearings,
         "n_support": sol.n_support,
         "manoeuvres_s": [float(m) for m in sol.manoeuvres],
         "manoeuvres_detected": sol.manoeuvres_detected,
         "warnings": list(sol.warnings),
     }
+
+
+def solution_summary(cid: str, s: TMASolution) -> str:
+    """One console line of ``seatrack tma``; operator numbers (m, deg, m/s) only for an
+    observable, converged solution."""
+    if not s.observable:
+        return f"contact {cid}: NOT OBSERVABLE (no range, course or speed)"
+    if not s.converged:
+        return (
+            f"contact {cid}: NOT CONVERGED after {s.iterations} iterations "
+            "(no range, course or speed)"
+        )
+    L = s.last
+    return (
+        f"contact {cid}: range {L.range:.0f} +/- {L.sigma_range:.0f} m, "
+        f"bearing {math.degrees(L.bearing):.1f} deg, "
+        f"course {math.degrees(L.course):.1f} +/- {math.degrees(L.sigma_course):.1f} deg, "
+        f"speed {L.speed:.2f} +/- {L.sigma_speed:.2f} m/s ({s.iterations} iterations)"
+    )

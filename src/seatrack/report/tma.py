@@ -8,8 +8,10 @@ from pathlib import Path
 
 import numpy as np
 
+from seatrack.io.atomic import atomic_path
 from seatrack.tma.bounds import ellipse
-from seatrack.tma.solver import Bearings, TMASolution
+from seatrack.tma.problem import Bearings
+from seatrack.tma.result import TMASolution
 
 __all__ = ["plot_solutions"]
 
@@ -25,8 +27,9 @@ def plot_solutions(
 
     Left: own-ship track, bearing lines (at most ``max_lines`` per contact, drawn to
     1.3 x the estimated range, or 20 km when unobservable), the estimated target track and
-    ``n_ellipses`` 95 % position ellipses along it (observable solutions only).
-    Right: bearing residuals (deg) against time.
+    ``n_ellipses`` 95 % position ellipses along it (observable and converged solutions
+    only). Right: bearing residuals (deg) against time. Written atomically
+    (:func:`seatrack.io.atomic.atomic_path`).
     """
     import matplotlib
 
@@ -47,7 +50,7 @@ def plot_solutions(
             label="own ship" if k == 0 else None,
         )
         idx = np.unique(np.round(np.linspace(0, len(b) - 1, min(max_lines, len(b)))).astype(int))
-        if sol.observable:
+        if sol.valid:
             est = sol.position_at(b.t)
             length = 1.3 * np.hypot(*(est - b.observer).T)
         else:
@@ -73,7 +76,8 @@ def plot_solutions(
                     Ellipse(xy, 2 * a / 1e3, 2 * c / 1e3, angle=ang, fill=False, color=col)
                 )
         else:
-            ax.plot([], [], color=col, label=f"contact {cid} (not observable)")
+            why = "not observable" if not sol.observable else "not converged"
+            ax.plot([], [], color=col, label=f"contact {cid} ({why})")
         axr.plot(b.t, np.degrees(sol.residuals), ".-", color=col, lw=0.6, label=f"contact {cid}")
         for m in sol.manoeuvres:
             axr.axvline(m, color=col, ls="--", lw=0.8)
@@ -87,5 +91,8 @@ def plot_solutions(
     axr.set_ylabel("bearing residual (deg)")
     axr.set_title("bearing residuals (dashed: leg changes)")
     fig.tight_layout()
-    fig.savefig(str(path), dpi=110)
-    plt.close(fig)
+    try:
+        with atomic_path(path) as tmp:
+            fig.savefig(str(tmp), dpi=110)
+    finally:
+        plt.close(fig)

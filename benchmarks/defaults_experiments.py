@@ -1,0 +1,597 @@
+"""EXPERIMENTAL prototypes for issue 16, phase B -- measured with ``benchmarks/defaults.py``.
+
+Nothing here is a library method: these are batched prototypes (all runs of a set at
+once) of the improvements the issue asks for, kept in the repository so that the numbers
+in ``docs/notes/defaults_research.md`` can be reproduced. Each prototype gets only what a
+user gives -- the sensor's nominal noise -- unless its label says ``+class`` (the target
+class of the set, :mod:`seatrack.models.targets`).
+
+Prototypes (equations in the notes):
+
+* ``turn-centripetal`` -- the turning method's idea, kept on through a steady turn: a CV
+  EKF whose white-noise acceleration PSD is ``q = q_nom + kappa (w v)^2 T`` while the
+  heading filter's turn rate is significant (``|w| > sig sigma_w``), with ``w`` from a
+  (heading, turn rate) Kalman filter on the EKF's velocity (spec steps S2/S3).
+* ``cm-ekf`` -- self-tuning CV EKF: ``q`` by innovation covariance matching (Mehra 1972;
+  Sage-Husa-type fading memory ``b``): ``q_k = clip(EWMA_b(qhat_k))`` with
+  ``qhat_k = sum_c (y_c^2 - S0_cc) / sum_c (H Q1 H^T)_cc``, ``S0 = H F P F^T H^T + R``.
+* ``robust-cm`` -- algorithm R's robust variance (``R_c <- max(R_c, y_c^2/Delta -
+  (H P H^T)_cc)``) plus covariance matching on the CAPPED innovations
+  (``y_c^2 -> min(y_c^2, Delta S_cc)``), so a lone outlier moves ``q`` by at most one
+  capped term while a manoeuvre (a run of large innovations) raises it.
+
+Run: ``python benchmarks/defaults_experiments.py --runs 20`` (tuning seeds, then the
+chosen variants on headline seeds); ``--sets``; ``--grid`` for the parameter sweeps.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from seatrack import kalman
+from seatrack.filters.base import measurement_model, plot_gaussian, two_point_gaussian
+from seatrack.geometry import wrap_pi
+from seatrack.models.motion import cv_noise, cv_transition
+from seatrack.models.targets import TargetClass
+from seatrack.simulate.families import Scenario
+
+sys.path.insert(0, str(Path(__file__).parent))
+from defaults import (  # noqa: E402
+    SETS,
+    anchor_rows,
+    method_rows,
+    print_set,
+    rmse,
+    seeds,
+    stack_plots,
+    targets,
+)
+
+Estimate = np.ndarray
+SPEED_SIGMA = 300.0  # m/s initial velocity std when no class is given (the methods' 300)
+
+
+def _start(scs: Sequence[Scenario], speed_sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    first = [s.plots.take(np.zeros(1, int)) for s in scs]
+    xs, Ps = zip(*(plot_gaussian(p, s.sensor, speed_sigma) for p, s in zip(first, scs)))
+    return np.concatenate(xs), np.concatenate(Ps)
+
+
+def _R(scs: Sequence[Scenario], m: int) -> np.ndarray:
+    s = scs[0].sensor
+    sig = np.array([s.sigma_range, s.sigma_azimuth, s.sigma_range_rate])[:m]
+    return np.diag(sig**2)
+
+
+def polar_cv_loop(
+    scs: Sequence[Scenario],
+    policy: Callable[[dict[str, Any]], None],
+    speed_sigma: float = SPEED_SIGMA,
+) -> Estimate:
+    """A batched CV EKF on polar plots whose process noise and measurement variance are
+    set each scan by ``policy(ctx)``: ``ctx`` holds ``k, dt, x, P, y, S0, HQ1H, R`` and the
+    policy writes ``ctx["q"]`` (B,) before the prediction (called with ``stage='q'``) and
+    may write ``ctx["R"]`` (B, m, m) before the update (``stage='R'``) and read the result
+    after it (``stage='post'``)."""
+    st = stack_plots(scs)
+    z, sen, t = st["z"], st["sensor"], st["t"]
+    B, N, m = z.shape
+    model = measurement_model(2, 4, m == 3)
+    ang = model.angular.astype(float)
+    x, P = _start(scs, speed_sigma)
+    R0 = _R(scs, m)
+    out = np.empty((B, N, 4))
+    out[:, 0] = x
+    ctx: dict[str, Any] = {"B": B, "m": m, "R0": R0}
+    for k in range(1, N):
+        dt = float(t[k] - t[k - 1])
+        F = cv_transition(dt, 2)
+        ctx.update(k=k, dt=dt, x=x, P=P, stage="q")
+        policy(ctx)
+        Q1 = cv_noise(dt, 1.0, 2)
+        if ctx.get("w") is not None:  # coordinated-turn prediction with a known turn rate
+            F = ct_matrix(ctx["w"], dt)
+        Pf = F @ P @ np.swapaxes(F, -1, -2)
+        x = np.einsum("...ij,...j->...i", F, x)
+        P = Pf + ctx["q"][:, None, None] * Q1
+        s = sen[:, k]
+        hx = model.h(x, s)
+        H = model.jacobian(x, s)
+        y = z[:, k] - hx
+        y = np.where(ang > 0, wrap_pi(y), y)
+        HPH = H @ P @ np.swapaxes(H, -1, -2)
+        ctx.update(x=x, P=P, y=y, HPH=HPH, S0=H @ Pf @ np.swapaxes(H, -1, -2) + R0,
+                   HQ1H=H @ Q1 @ np.swapaxes(H, -1, -2), R=np.broadcast_to(R0, (B, m, m)),
+                   stage="R")  # fmt: skip
+        policy(ctx)
+        res = kalman.extended_update(x, P, z[:, k], hx, H, ctx["R"], ang, check=False)
+        x, P = res.x, res.P
+        ctx.update(x=x, P=P, stage="post")
+        policy(ctx)
+        out[:, k] = x
+    return out
+
+
+def ct_matrix(w: np.ndarray, dt: float) -> np.ndarray:
+    """``(B, 4, 4)`` transition of ``[x, y, vx, vy]`` for a coordinated turn at known rate
+    ``w`` (rad/s, clockwise positive): the velocity turns clockwise by ``w dt``."""
+    th = w * dt
+    small = np.abs(w) < 1e-9
+    ws = np.where(small, 1.0, w)
+    s = np.where(small, dt, np.sin(th) / ws)
+    c = np.where(small, 0.0, (1 - np.cos(th)) / ws)
+    F = np.zeros(w.shape + (4, 4))
+    F[..., 0, 0] = F[..., 1, 1] = 1.0
+    F[..., 0, 2], F[..., 0, 3], F[..., 1, 2], F[..., 1, 3] = s, c, -c, s
+    co, si = np.cos(th), np.sin(th)
+    F[..., 2, 2], F[..., 2, 3], F[..., 3, 2], F[..., 3, 3] = co, si, -si, co
+    return F
+
+
+# ---------------------------------------------------------------------------
+# (d) self-tuning q by covariance matching
+# ---------------------------------------------------------------------------
+def cm_policy(q_min: float, q_max: float, b: float, robust_delta: float | None = None):
+    """Covariance matching of the process-noise PSD (see the module docstring)."""
+    state: dict[str, Any] = {}
+
+    def policy(ctx: dict[str, Any]) -> None:
+        B = ctx["B"]
+        if ctx["stage"] == "q":
+            ctx["q"] = state.get("q", np.full(B, q_min))
+            return
+        if ctx["stage"] != "R":
+            return
+        y, S0, HQ1H, HPH = ctx["y"], ctx["S0"], ctx["HQ1H"], ctx["HPH"]
+        R0 = ctx["R0"]
+        d = np.arange(2)  # range and azimuth channels (range rate not used for matching)
+        y2 = y[:, d] ** 2
+        if robust_delta is not None:
+            S = HPH[:, d, d] + R0[d, d]
+            y2 = np.minimum(y2, robust_delta * S)  # capped: one outlier moves q a little
+            # algorithm R: robust variance for the update
+            Rr = np.maximum(R0[d, d], y[:, d] ** 2 / robust_delta - HPH[:, d, d])
+            R = np.broadcast_to(R0, HPH.shape).copy()
+            R[:, d, d] = Rr
+            ctx["R"] = R
+        w = 1.0 / S0[:, d, d]  # normalise the channels
+        qhat = np.sum(w * (y2 - S0[:, d, d]), -1) / np.sum(w * HQ1H[:, d, d], -1)
+        n = state.get("n", 0) + 1
+        state["n"] = n
+        g = (1 - b) / (1 - b**n)  # Sage-Husa fading-memory weight
+        avg = (1 - g) * state.get("avg", np.zeros(B)) + g * qhat
+        state["avg"] = avg
+        state["q"] = np.clip(avg, q_min, q_max)
+
+    return policy
+
+
+# ---------------------------------------------------------------------------
+# (a) turning: Q raised by the centripetal acceleration while the target turns
+# ---------------------------------------------------------------------------
+def turning_policy(
+    q_nom: float,
+    kappa: float,
+    q_heading: float,
+    sig: float,
+    omega0: float = 0.1,
+    w_max: float = 0.35,
+    ct: bool = False,
+):
+    """``q = q_nom + kappa (w v)^2 T`` while ``|w| > sig sigma_w`` (heading filter), ``w``
+    clipped to ``w_max``; with ``ct`` the prediction is a coordinated turn at ``w`` then
+    (and ``kappa`` multiplies ``(sigma_w v)^2 T`` instead: the turn-rate uncertainty)."""
+    hs: dict[str, Any] = {}
+
+    def policy(ctx: dict[str, Any]) -> None:
+        B, dt = ctx["B"], ctx.get("dt", 1.0)
+        if ctx["stage"] == "q":
+            q = np.full(B, q_nom)
+            ctx["w"] = None
+            if "w" in hs:
+                w, sw, v = np.clip(hs["w"], -w_max, w_max), np.sqrt(hs["P"][:, 1, 1]), hs["v"]
+                on = hs["started"] & (np.abs(w) > sig * sw)
+                a = np.minimum(sw, w_max) if ct else w
+                q = q + np.where(on, kappa * (a * v) ** 2 * dt, 0.0)
+                if ct:
+                    ctx["w"] = np.where(on, w, 0.0)
+            ctx["q"] = q
+            return
+        if ctx["stage"] != "post":
+            return
+        x, P = ctx["x"], ctx["P"]
+        vx, vy = x[:, 2], x[:, 3]
+        v2 = vx**2 + vy**2
+        usable = v2 / np.maximum(P[:, 2, 2] + P[:, 3, 3], 1e-12) > 2.0
+        b = np.arctan2(vx, vy)
+        J = np.stack([vy, -vx], -1) / np.maximum(v2, 1e-12)[:, None]
+        vb = np.einsum("bi,bij,bj->b", J, P[:, 2:4, 2:4], J)
+        if "w" not in hs:
+            hs.update(b=b, w=np.zeros(B), P=np.tile(np.diag([1.0, omega0**2]), (B, 1, 1)),
+                      started=np.zeros(B, bool), v=np.sqrt(v2))  # fmt: skip
+        Fh = np.array([[1.0, dt], [0.0, 1.0]])
+        Qh = q_heading * np.array([[dt**3 / 3, dt**2 / 2], [dt**2 / 2, dt]])
+        hb = hs["b"] + hs["w"] * dt
+        Ph = Fh @ hs["P"] @ Fh.T + Qh
+        e = wrap_pi(b - hb)
+        Sb = Ph[:, 0, 0] + vb
+        K = Ph[:, :, 0] / Sb[:, None]
+        nb = hb + K[:, 0] * e
+        nw = hs["w"] + K[:, 1] * e
+        nP = Ph - K[:, :, None] * Ph[:, None, 0, :]
+        fresh = usable & ~hs["started"]
+        nb = np.where(fresh, b, nb)
+        nw = np.where(fresh, 0.0, nw)
+        P0 = np.zeros_like(nP)
+        P0[:, 0, 0], P0[:, 1, 1] = vb, omega0**2
+        nP = np.where(fresh[:, None, None], P0, nP)
+        keep = ~usable & ~hs["started"]
+        hs["b"] = np.where(keep, hs["b"], wrap_pi(nb))
+        hs["w"] = np.where(keep, hs["w"], nw)
+        hs["P"] = np.where(keep[:, None, None], hs["P"], nP)
+        hs["started"] = hs["started"] | usable
+        hs["v"] = np.sqrt(v2)
+
+    return policy
+
+
+def oracle_policy(scs: Sequence[Scenario], q_small: float, ct: bool):
+    """ORACLE (knows the truth): ``q = ((w v)^2 + a_t^2) T + q_small`` from the true turn
+    rate and along-track acceleration of the interval, or a CT prediction at the true turn
+    rate (``ct``) with ``q = a_t^2 T + q_small``. Shows the head-room of any Q schedule /
+    turn-rate estimate."""
+    w = np.stack([s.turn_rate for s in scs])
+    v = np.stack([np.hypot(s.truth[:, 2], s.truth[:, 3]) for s in scs])
+    at = np.gradient(v, scs[0].plots.t, axis=1)
+
+    def policy(ctx: dict[str, Any]) -> None:
+        if ctx["stage"] != "q":
+            return
+        k, dt = ctx["k"], ctx["dt"]
+        wk = 0.5 * (w[:, k - 1] + w[:, k])
+        ak = np.maximum(np.abs(at[:, k - 1]), np.abs(at[:, k]))
+        if ct:
+            ctx["w"], ctx["q"] = wk, q_small + ak**2 * dt
+        else:
+            ctx["w"], ctx["q"] = None, q_small + ((wk * v[:, k]) ** 2 + ak**2) * dt
+
+    return policy
+
+
+def mode_q_policy(qs: Sequence[float], p_stay: Sequence[float]):
+    """ONE CV EKF whose q is the mode-probability mixture ``sum_j mu_j^- q_j`` of a Markov
+    chain over process-noise levels; ``mu`` is updated from the innovation likelihoods
+    ``N(y; 0, H F P F^T H^T + q_j H Q1 H^T + R)`` of each level (a "raise Q on a Bayesian
+    manoeuvre decision" filter: one state, one update, M likelihoods)."""
+    q = np.asarray(qs, dtype=float)
+    M = q.size
+    ps = np.asarray(p_stay, dtype=float)
+    PI = np.where(np.eye(M) > 0, ps[:, None], ((1 - ps) / max(M - 1, 1))[:, None])
+    st: dict[str, Any] = {}
+
+    def policy(ctx: dict[str, Any]) -> None:
+        if ctx["stage"] == "q":
+            mu = st.get("mu", np.full((ctx["B"], M), 1.0 / M))
+            st["prior"] = mu @ PI
+            ctx["q"] = st["prior"] @ q
+            return
+        if ctx["stage"] != "R":
+            return
+        y, S0, HQ = ctx["y"], ctx["S0"], ctx["HQ1H"]
+        S = S0[:, None] + q[None, :, None, None] * HQ[:, None]  # (B, M, m, m)
+        _, logdet = np.linalg.slogdet(S)
+        maha = np.einsum("bi,bjik,bk->bj", y, np.linalg.inv(S), y)
+        lw = np.log(np.maximum(st["prior"], 1e-300)) - 0.5 * (maha + logdet)
+        lw -= lw.max(-1, keepdims=True)
+        mu = np.exp(lw)
+        st["mu"] = mu / mu.sum(-1, keepdims=True)
+
+    return policy
+
+
+def hybrid_policy(cm: Callable[[dict[str, Any]], None], turn: Callable[[dict[str, Any]], None]):
+    """``q = max(q_cm, q_turn)``: covariance matching reacts at a turn's onset, the
+    centripetal term keeps q up through a steady turn."""
+
+    def policy(ctx: dict[str, Any]) -> None:
+        if ctx["stage"] == "q":
+            cm(ctx)
+            q1 = ctx["q"]
+            turn(ctx)
+            ctx["q"] = np.maximum(q1, ctx["q"])
+        else:
+            cm(ctx)
+            turn(ctx)
+
+    return policy
+
+
+def ct_ekf_batch(
+    scs: Sequence[Scenario], q: float, q_omega: float, w_sigma: float, speed_sigma: float
+) -> Estimate:
+    """A single coordinated-turn EKF ``[x, y, vx, vy, w]`` (white acceleration ``q``,
+    turn-rate random walk ``q_omega``), batched over the runs: the turn-rate estimate that
+    a CT prediction would use, from the position innovations themselves."""
+    from seatrack.models.motion import ct_jacobian, ct_noise, ct_transition
+
+    st = stack_plots(scs)
+    z, sen, t = st["z"], st["sensor"], st["t"]
+    B, N, m = z.shape
+    model = measurement_model(2, 5, m == 3)
+    ang = model.angular.astype(float)
+    out = np.empty((B, N, 4))
+    out[:, 0] = _start(scs, speed_sigma)[0]
+    # two-plot start: a CT-EKF started with a zero velocity turns its turn rate into garbage
+    pairs = [two_point_gaussian(s.plots.take([0]), s.plots.take([1]), s.sensor) for s in scs]
+    x = np.concatenate([np.concatenate([p[0] for p in pairs]), np.zeros((B, 1))], -1)
+    P = np.zeros((B, 5, 5))
+    P[:, :4, :4] = np.concatenate([p[1] for p in pairs])
+    P[:, 4, 4] = w_sigma**2
+    out[:, 1] = x[:, :4]
+    R0 = _R(scs, m)
+    for k in range(2, N):
+        dt = float(t[k] - t[k - 1])
+        F = ct_jacobian(x, dt)
+        x, P = kalman.extended_predict(ct_transition(x, dt), P, F, ct_noise(dt, q, q_omega, 2))
+        s = sen[:, k]
+        res = kalman.extended_update(x, P, z[:, k], model.h(x, s), model.jacobian(x, s), R0, ang,
+                                     check=False)  # fmt: skip
+        x, P = res.x, res.P
+        out[:, k] = x[:, :4]
+    return out
+
+
+def _mixture_update(
+    x: np.ndarray,
+    P: np.ndarray,
+    z: np.ndarray,
+    hx: np.ndarray,
+    H: np.ndarray,
+    y: np.ndarray,
+    R0: np.ndarray,
+    ang: np.ndarray,
+    epsilon: float,
+    k: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Exact update under a contaminated-Gaussian measurement model: every combination of
+    nominal / outlier channels is a Kalman update with its own R; the posterior is their
+    mixture collapsed to its mean and covariance, the likelihood their prior-weighted sum
+    (log space). ``epsilon = 0``: the plain EKF update."""
+    m = R0.shape[0]
+    combos = [np.array(c) for c in np.ndindex(*(2,) * m)] if epsilon > 0 else [np.zeros(m, int)]
+    xs, Ps, lls = [], [], []
+    for c in combos:
+        Rc = R0 * np.where(c > 0, k, 1.0)[:, None]
+        prior = float(np.prod(np.where(c > 0, epsilon, 1 - epsilon)))
+        res = kalman.extended_update(x, P, z, hx, H, Rc, ang, check=False)
+        xs.append(res.x)
+        Ps.append(res.P)
+        lls.append(np.log(prior) + res.log_likelihood)
+    ll = np.stack(lls)  # (C, ...)
+    tot = np.logaddexp.reduce(ll, axis=0)
+    w = np.exp(ll - tot)
+    xm = np.einsum("c...,c...n->...n", w, np.stack(xs))
+    d = np.stack(xs) - xm
+    Pm = np.einsum("c...,c...nm->...nm", w, np.stack(Ps) + d[..., :, None] * d[..., None, :])
+    return xm, Pm, tot
+
+
+def imm_levels_batch(
+    scs: Sequence[Scenario],
+    qs: Sequence[float],
+    p_stay: Sequence[float],
+    epsilon: float = 0.0,
+    scale: Sequence[float] = (10.0, 25.0, 10.0),
+    speed_sigma: float = SPEED_SIGMA,
+) -> Estimate:
+    """IMM of CV EKFs with PSDs ``qs`` (persistence ``p_stay`` per level, the rest spread
+    uniformly over the other levels), batched over the runs, with
+    an optional contaminated-Gaussian measurement model per channel: prior outlier
+    probability ``epsilon``, outlier variance ``scale_c R_c`` (:func:`_mixture_update`);
+    its likelihood is a mixture too, so one outlier barely moves the model probabilities
+    while a manoeuvre (a run of innovations too large even for the outlier component of
+    the low-q model) does."""
+    st = stack_plots(scs)
+    z, sen, t = st["z"], st["sensor"], st["t"]
+    B, N, m = z.shape
+    model = measurement_model(2, 4, m == 3)
+    ang = model.angular.astype(float)
+    x0, P0 = _start(scs, speed_sigma)
+    M = len(qs)
+    X = np.repeat(x0[:, None], M, 1)  # (B, M, 4)
+    P = np.repeat(P0[:, None], M, 1)
+    mu = np.full((B, M), 1.0 / M)
+    ps = np.asarray(p_stay, dtype=float)
+    PI = np.where(np.eye(M) > 0, ps[:, None], ((1 - ps) / max(M - 1, 1))[:, None])
+    R0 = _R(scs, m)
+    k = np.asarray(scale, dtype=float)[:m]
+    qs = np.asarray(qs, dtype=float)
+    out = np.empty((B, N, 4))
+    out[:, 0] = x0
+    for kk in range(1, N):
+        dt = float(t[kk] - t[kk - 1])
+        # mixing
+        c = mu @ PI  # (B, M)
+        w = mu[:, :, None] * PI[None] / np.maximum(c[:, None, :], 1e-300)  # (B, i, j)
+        Xm = np.einsum("bij,bin->bjn", w, X)
+        d = X[:, :, None, :] - Xm[:, None, :, :]  # (B, i, j, n)
+        Pm = np.einsum("bij,bijnm->bjnm", w, P[:, :, None] + d[..., :, None] * d[..., None, :])
+        F = cv_transition(dt, 2)
+        Q = cv_noise(dt, qs, 2)  # (M, 4, 4)
+        Xp = Xm @ F.T
+        Pp = F @ Pm @ F.T + Q[None]
+        s = sen[:, kk][:, None]
+        hx = model.h(Xp, s)
+        H = model.jacobian(Xp, s)
+        y = z[:, kk][:, None] - hx
+        y = np.where(ang > 0, wrap_pi(y), y)
+        X, P, L = _mixture_update(Xp, Pp, z[:, kk][:, None], hx, H, y, R0, ang, epsilon, k)
+        lw = np.log(np.maximum(c, 1e-300)) + L
+        lw -= lw.max(-1, keepdims=True)
+        mu = np.exp(lw)
+        mu /= mu.sum(-1, keepdims=True)
+        out[:, kk] = np.einsum("bj,bjn->bn", mu, X)
+    return out
+
+
+# ---------------------------------------------------------------------------
+# Experiments
+# ---------------------------------------------------------------------------
+def proto_rows(
+    variants: dict[str, Callable[..., Callable[[dict[str, Any]], None]]],
+    speed_sigma: Callable[[TargetClass], float] | None = None,
+) -> Callable[[list[Scenario], TargetClass], list[dict[str, Any]]]:
+    def rows(scs: list[Scenario], tc: TargetClass) -> list[dict[str, Any]]:
+        out = []
+        for label, make in variants.items():
+            ss = SPEED_SIGMA if speed_sigma is None else speed_sigma(tc)
+            est = polar_cv_loop(scs, make(scs) if "ORACLE" in label else make(), ss)
+            pos, vel = rmse(est, scs)
+            out.append({"filter": label, "pos": float(pos), "vel": float(vel), "note": "",
+                        "kind": "proto"})  # fmt: skip
+        return out
+
+    return rows
+
+
+def ct_rows(scs: list[Scenario], tc: TargetClass) -> list[dict[str, Any]]:
+    """CT-EKF rows: generic defaults (no class) and class-derived noise."""
+    dt = scs[0].dt
+    out = []
+    cfgs = {
+        "ct-ekf q=1 qw=1e-3": (1.0, 1e-3, 0.1, SPEED_SIGMA),
+        "ct-ekf+class": (tc.q_tangential(dt), tc.q_turn_rate, tc.turn_rate_max, tc.speed_max),
+    }  # fmt: skip
+    for label, (q, qw, ws, ss) in cfgs.items():
+        pos, vel = rmse(ct_ekf_batch(scs, q, qw, ws, ss), scs)
+        out.append({"filter": label, "pos": float(pos), "vel": float(vel), "note": "",
+                    "kind": "proto"})  # fmt: skip
+    return out
+
+
+L5 = (1e-4, 1e-2, 1.0, 1e2, 1e4)  # m^2/s^3: the class-free ladder of the level IMM
+
+
+def variants_for(set_name: str, dt: float, tc: TargetClass) -> dict[str, Callable[..., Any]]:
+    """The CV-loop prototype variants measured on a set (fixed before the headline run)."""
+    v: dict[str, Callable[..., Any]] = {
+        # (d) self-tuning, sensor noise only
+        "cm-ekf b=0.7": lambda: cm_policy(1e-4, 1e5, 0.7),
+        # (a) turning: Q from the centripetal acceleration of the heading filter's turn rate
+        "turn-centripetal k=3": lambda: turning_policy(0.5, 3.0, 1e-4, 1.0),
+        "turn-ct (heading-filter w)": lambda: turning_policy(0.5, 1.0, 1e-4, 1.0, ct=True),
+        "hybrid cm0.7+centripetal": lambda: hybrid_policy(
+            cm_policy(1e-4, 1e5, 0.7), turning_policy(0.5, 1.0, 1e-4, 1.0)
+        ),
+        "mode-q L5": lambda: mode_q_policy(L5, [0.95] * 5),
+        "mode-q+class": lambda: mode_q_policy((tc.q_steady(dt), tc.q_max(dt)), tc.p_stay(dt)),
+        "ORACLE q=((wv)^2+at^2)T": lambda scs: oracle_policy(scs, tc.q_steady(dt), ct=False),
+        "ORACLE ct(true w)": lambda scs: oracle_policy(scs, tc.q_steady(dt), ct=True),
+    }
+    if "c20" in set_name:
+        v["robust-cm b=0.8 D=2.7"] = lambda: cm_policy(1e-4, 1e5, 0.8, robust_delta=2.7)
+    return v
+
+
+def level_rows(scs: list[Scenario], tc: TargetClass) -> list[dict[str, Any]]:
+    """Level-IMM rows: the class-free ladder :data:`L5` and the class's two levels, each
+    with a Gaussian and a contaminated (epsilon = 0.1) measurement model."""
+    dt = scs[0].dt
+    cfgs = {
+        "imm-levels L5": (L5, [0.95] * 5, 0.0, SPEED_SIGMA),
+        "imm-levels L5 mix0.1": (L5, [0.95] * 5, 0.1, SPEED_SIGMA),
+        "imm2+class": ((tc.q_steady(dt), tc.q_max(dt)), tc.p_stay(dt), 0.0, tc.speed_max),
+        "imm2+class mix0.1": ((tc.q_steady(dt), tc.q_max(dt)), tc.p_stay(dt), 0.1, tc.speed_max),
+    }
+    out = []
+    for label, (qs, ps, eps, ss) in cfgs.items():
+        pos, vel = rmse(imm_levels_batch(scs, qs, ps, eps, speed_sigma=ss), scs)
+        out.append({"filter": label, "pos": float(pos), "vel": float(vel), "note": "",
+                    "kind": "proto"})  # fmt: skip
+    return out
+
+
+#: tuned configurations of the existing methods, measured beside their defaults
+def extra_configs(dt: float, tc: TargetClass) -> dict[str, dict[str, Any]]:
+    """Configurations of existing methods measured beside their defaults (range-rate sets):
+    ``label=method`` -> config keys added to the nominal noise."""
+    a, b = tc.p_stay(dt)
+    return {
+        "g=5 sa=10=mm-rangerate": {"accel_g": 5.0, "sigma_accel_mps2": 10.0},
+        "+rr=imm": {"use_range_rate": True},
+        "+rr qct=1000 qw=1e-3 qcv=0.01=imm": {"use_range_rate": True, "q_ct": 1000.0,
+                                              "q_omega": 1e-3, "q_cv": 0.01},
+        "+rr+class=imm": {"use_range_rate": True, "q_cv": tc.q_steady(dt),
+                          "q_ct": tc.q_tangential(dt), "q_omega": tc.q_turn_rate,
+                          "p_stay": 0.5 * (a + b)},
+    }  # fmt: skip
+
+
+def consistency(n: int) -> None:
+    """Fighter set, TUNING seeds: position consistency (mean of the squared errors over the
+    reported variances, per axis; 1 = consistent) and how often the largest model
+    probability exceeds 0.99, for the multiple-model methods."""
+    from defaults import SKIP, nominal_config
+    from seatrack.filters.registry import run
+
+    scs = [SETS["fighter"].make(k) for k in seeds(n, True)]
+    cfgs = {
+        "mm-rangerate": ("mm-rangerate", {}),
+        "mm-rangerate g=5 sa=10": ("mm-rangerate", {"accel_g": 5.0, "sigma_accel_mps2": 10.0}),
+        "mm": ("mm", {}),
+        "imm": ("imm", {}),
+        "imm +rr qct=1000 qw=1e-3 qcv=0.01": (
+            "imm", {"use_range_rate": True, "q_ct": 1000.0, "q_omega": 1e-3, "q_cv": 0.01}
+        ),
+    }  # fmt: skip
+    for label, (method, cfg) in cfgs.items():
+        z2, pmax = [], []
+        for sc in scs:
+            plots = dataclasses.replace(sc.plots, elevation=None)
+            cols = run(method, plots, {**nominal_config(sc), **cfg})
+            ex = (cols["x_m"] - sc.truth[:, 0]) / cols["std_x_m"]
+            ey = (cols["y_m"] - sc.truth[:, 1]) / cols["std_y_m"]
+            z2.append(((ex**2 + ey**2) / 2)[SKIP:])
+            probs = [cols[c] for c in cols if c.startswith("p_")]
+            pmax.append(np.max(np.stack(probs), 0)[SKIP:])
+        e2, pm = np.concatenate(z2), np.concatenate(pmax)
+        print(f"{label:36s} squared error / variance {e2.mean():5.2f}  "
+              f"max model probability > 0.99 on {np.mean(pm > 0.99):.2f} of scans")  # fmt: skip
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    from seatrack.models.targets import target_class
+
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=20)
+    ap.add_argument("--sets", default=",".join(SETS))
+    ap.add_argument("--methods", default="ekf,turning,robust-adaptive,mm-rangerate,imm")
+    ap.add_argument("--headline", action="store_true", help="headline seeds (default tuning)")
+    ap.add_argument("--consistency", action="store_true", help="multiple-model consistency")
+    a = ap.parse_args(argv)
+    if a.consistency:
+        consistency(a.runs)
+        return
+    tuning = not a.headline
+    print(f"seeds: {'TUNING' if tuning else 'HEADLINE'}")
+    for name in a.sets.split(","):
+        ss = SETS[name]
+        scs = [ss.make(k) for k in seeds(a.runs, tuning)]
+        tc = target_class(ss.target)
+        extra = extra_configs(scs[0].dt, tc) if scs[0].plots.has_range_rate else {}
+        rows = method_rows(scs, a.methods.split(","), extra) + anchor_rows(scs, tc)
+        rows += proto_rows(variants_for(name, scs[0].dt, tc))(scs, tc)
+        rows += ct_rows(scs, tc) + level_rows(scs, tc)
+        print_set(ss, rows, targets(name, rows), a.runs)
+        sys.stdout.flush()
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,140 @@
+"""Tests of seatrack.models.targets: the target classes and the suggested parameters."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from seatrack.models.targets import (
+    AIRCRAFT,
+    FIGHTER,
+    SHIP,
+    SUBMARINE,
+    TARGET_CLASSES,
+    cv_steady_state,
+    predicted_mse,
+    suggest_parameters,
+    target_class,
+)
+
+DEG = math.pi / 180
+
+
+def test_four_classes_by_name_and_unknown_name() -> None:
+    assert set(TARGET_CLASSES) == {"ship", "submarine", "aircraft", "fighter"}
+    assert target_class("fighter") is FIGHTER
+    with pytest.raises(ValueError, match="ship, submarine, aircraft, fighter"):
+        target_class("frigate")
+
+
+@pytest.mark.parametrize("tc", list(TARGET_CLASSES.values()), ids=list(TARGET_CLASSES))
+def test_every_number_has_a_source(tc) -> None:
+    numeric = [f.name for f in dataclasses.fields(tc) if isinstance(getattr(tc, f.name), float)]
+    assert numeric and all(tc.sources[name].strip() for name in numeric)
+
+
+def test_missing_source_or_inconsistent_numbers_are_rejected() -> None:
+    src = dict(SHIP.sources)
+    del src["turn_rate_max"]
+    with pytest.raises(ValueError, match="no source for turn_rate_max"):
+        dataclasses.replace(SHIP, sources=src)
+    with pytest.raises(ValueError, match="accel_steady <= accel_typical"):
+        dataclasses.replace(SHIP, accel_typical=1.0)
+    with pytest.raises(ValueError, match="must be positive"):
+        dataclasses.replace(SHIP, manoeuvre_time=0.0)
+
+
+def test_classes_are_ordered_by_agility() -> None:
+    order = [SUBMARINE, SHIP, AIRCRAFT, FIGHTER]
+    acc = [c.accel_typical for c in order]
+    assert acc == sorted(acc)
+    assert AIRCRAFT.turn_rate_typical == pytest.approx(3 * DEG)  # standard-rate turn
+    assert FIGHTER.accel_max == pytest.approx(9 * 9.80665)
+    # typical lateral acceleration = typical turn rate x typical speed (within 25 %)
+    for c in (SHIP, SUBMARINE, AIRCRAFT, FIGHTER):
+        assert c.accel_typical == pytest.approx(c.turn_rate_typical * c.speed_typical, rel=0.25)
+
+
+def test_derived_noise_parameters() -> None:
+    T = 4.0
+    assert AIRCRAFT.q_steady(T) < AIRCRAFT.q_manoeuvre(T) < AIRCRAFT.q_max(T)
+    assert AIRCRAFT.q_manoeuvre(T) == pytest.approx(AIRCRAFT.accel_typical**2 * T)
+    # Singer: sigma^2 = A^2/3 (1 + 4 Pmax - P0), P0 = straight fraction
+    p0 = 1 - AIRCRAFT.manoeuvre_fraction
+    s2 = AIRCRAFT.accel_max**2 / 3 * (1 + 4 * AIRCRAFT.p_max_accel - p0)
+    assert AIRCRAFT.singer_sigma**2 == pytest.approx(s2)
+    assert AIRCRAFT.singer_q == pytest.approx(2 * s2 / AIRCRAFT.singer_tau)
+    # IMM persistence: mean sojourn time T / (1 - p) close to the class times for T << tau
+    a, b = SHIP.p_stay(1.0)
+    assert 1 / (1 - a) == pytest.approx(SHIP.straight_time, rel=0.01)
+    assert 1 / (1 - b) == pytest.approx(SHIP.manoeuvre_time, rel=0.01)
+    M = FIGHTER.transition_matrix(2.0)
+    np.testing.assert_allclose(M.sum(1), 1.0)
+    assert FIGHTER.q_turn_rate == pytest.approx(FIGHTER.turn_rate_typical**2 / 15.0)
+    assert FIGHTER.q_turn_rate_onset == pytest.approx(FIGHTER.turn_rate_typical**2 / 1.0)
+    assert AIRCRAFT.q_tangential(4.0) == pytest.approx(AIRCRAFT.accel_tangential**2 * 4.0)
+    with pytest.raises(ValueError, match="dt must be a positive"):
+        SHIP.q_steady(0.0)
+
+
+def _simulate_cv_kf(q: float, sigma: float, T: float, accel: float, q_true: float, n: int):
+    """Monte-Carlo of the one-axis CV KF: filtered position errors after convergence."""
+    rng = np.random.default_rng(5)
+    F = np.array([[1.0, T], [0.0, 1.0]])
+    Q1 = np.array([[T**3 / 3, T**2 / 2], [T**2 / 2, T]])
+    g = np.array([T**2 / 2, T])
+    H = np.array([1.0, 0.0])
+    B = 4000
+    x = np.zeros((B, 2))
+    xh = np.zeros((B, 2))
+    P = np.eye(2) * 1e4
+    Lq = np.linalg.cholesky(q_true * Q1 + 1e-15 * np.eye(2))
+    err = []
+    for k in range(n):
+        x = x @ F.T + g * accel + rng.standard_normal((B, 2)) @ Lq.T
+        xh = xh @ F.T
+        P = F @ P @ F.T + q * Q1
+        S = P[0, 0] + sigma**2
+        K = P[:, 0] / S
+        z = x[:, 0] + sigma * rng.standard_normal(B)
+        xh = xh + np.outer(z - xh[:, 0], K)
+        P = P - np.outer(K, H @ P)
+        if k > n - 20:
+            err.append(xh[:, 0] - x[:, 0])
+    return np.concatenate(err)
+
+
+def test_steady_state_matches_monte_carlo() -> None:
+    q, sigma, T = 2.0, 30.0, 2.0
+    ss = cv_steady_state(q, sigma, T, q_true=q)
+    e = _simulate_cv_kf(q, sigma, T, 0.0, q, 200)
+    # a matched filter: noise variance is the steady-state filtered variance alpha sigma^2
+    assert ss.noise_var == pytest.approx(ss.alpha * sigma**2, rel=1e-6)
+    assert np.var(e) == pytest.approx(ss.noise_var, rel=0.05)
+    # a constant acceleration through a noise-free filter: the lag
+    e_acc = _simulate_cv_kf(q, 1e-9 + sigma, T, 3.0, 0.0, 300)
+    assert np.mean(e_acc) == pytest.approx(ss.lag * 3.0, rel=0.05)
+    assert ss.lag < 0  # the estimate trails an accelerating target
+
+
+def test_suggestion_balances_noise_and_lag() -> None:
+    s = suggest_parameters("aircraft", 4.0, 40.0, 0.08 * DEG, 30e3)
+    assert s.q_steady < s.q_fixed < s.q_max
+    sig = s.sigma_position
+    best = predicted_mse(AIRCRAFT, s.q_fixed, sig, 4.0)
+    for f in (0.3, 3.0):
+        assert predicted_mse(AIRCRAFT, s.q_fixed * f, sig, 4.0) > best
+    assert s.predicted_rmse == pytest.approx(math.sqrt(best))
+    assert s.tracking_index_manoeuvre == pytest.approx(
+        AIRCRAFT.accel_typical * 16 / max(sig), rel=1e-9
+    )
+    # a quieter sensor gives a smaller predicted error
+    s2 = suggest_parameters("aircraft", 4.0, 10.0, 0.02 * DEG, 30e3)
+    assert s2.predicted_rmse < s.predicted_rmse
+    # a class that never manoeuvres wants the steady q (up to the search tolerance)
+    calm = dataclasses.replace(SHIP, manoeuvre_time=1e-3, straight_time=1e9)
+    s3 = suggest_parameters(calm, 2.5, 10.0, 0.3 * DEG, 5e3)
+    assert s3.q_fixed == pytest.approx(calm.q_steady(2.5), rel=0.1)

@@ -34,6 +34,8 @@ def config_error(path: str, method: str, table: Mapping[str, Any], error: str) -
     A string where the method wants a number is named by its key (``evaluate.ekf.q =
     'abc' is not a number``); any other failure is reported with the table's key path.
     """
+    if error.startswith("ConfigError: "):  # the config layer names the key already
+        return InputError(f"{path}: {error.removeprefix('ConfigError: ')}")
     for k, v in table.items():
         if isinstance(v, str) and f"to float: {v!r}" in error:
             return InputError(f"{path}: evaluate.{method}.{k} = {v!r} is not a number")

@@ -149,7 +149,7 @@ def run_methods(
             plots = plots_from_measurements(meas, str(j))
             t0 = time.perf_counter()
             try:
-                cols = run(name, plots, cfg, source=f"[evaluate.{name}]")
+                cols = run(name, plots, cfg, source=f"evaluate.{name}")
             except Exception as exc:  # a failing method is reported, not fatal
                 if not catch:
                     raise

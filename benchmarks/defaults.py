@@ -25,9 +25,8 @@ every method <= best fixed q in hindsight on manoeuvring targets; ``turning`` <=
 min(narrow, wide); ``robust-adaptive`` <= 0.7 x mixture-R EKF and <= 1.3 x clairvoyant at
 20 % contamination; ``mm-rangerate`` <= 0.97 x best fixed q.
 
-The methods are called in ONE place, :func:`run_method` (today the registry's per-track
-runners on a :class:`~seatrack.io.plots.PlotTrack`; after the filter-contract merge, a
-one-line change to ``run_tracks``).
+The methods are called in ONE place, :func:`run_method` (the registry's
+:func:`~seatrack.filters.registry.run` on the filter contract).
 
 Seeds: headline runs use seeds ``HEADLINE_SEEDS.start + i``; ``--tuning`` runs the same
 table on ``TUNING_SEEDS.start + i`` instead (for development of the methods: see
@@ -40,6 +39,7 @@ Run: ``python benchmarks/defaults.py`` (20 runs per set), ``--runs N``, ``--quic
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Sequence
@@ -51,8 +51,7 @@ import numpy as np
 from seatrack import kalman
 from seatrack.evaluate.montecarlo import format_table
 from seatrack.filters.base import measurement_model, plot_gaussian
-from seatrack.filters.registry import METHODS, get_method
-from seatrack.io.plots import PlotTrack
+from seatrack.filters.registry import METHODS, run
 from seatrack.models.motion import cv_noise, cv_transition
 from seatrack.models.targets import TargetClass, target_class
 from seatrack.simulate.families import (
@@ -136,14 +135,10 @@ def nominal_config(sc: Scenario) -> dict[str, Any]:
 def run_method(name: str, sc: Scenario, config: dict[str, Any]) -> Estimate:
     """Run track method ``name`` over one scenario's plots: ``(N, 4)`` x, y, vx, vy.
 
-    THE adapter: today the registry's per-track runner on a PlotTrack; after the filter
-    contract lands, replace the call by ``run_tracks`` on ``sc.plots``.
+    THE adapter: the registry runs the method on the filter contract
+    (:func:`seatrack.filters.registry.run`, i.e. ``run_tracks`` on ``sc.plots``).
     """
-    p = sc.plots
-    n = len(p)
-    track = PlotTrack("1", p.t, p.range, p.azimuth, None, p.range_rate, p.sensor, p.sensor_vel,
-                      np.arange(n))  # fmt: skip
-    cols = get_method(name)(track, config)
+    cols = run(name, dataclasses.replace(sc.plots, elevation=None), config)
     return np.stack([cols["x_m"], cols["y_m"], cols["vx_mps"], cols["vy_mps"]], -1)
 
 

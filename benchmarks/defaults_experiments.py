@@ -27,6 +27,7 @@ chosen variants on headline seeds); ``--sets``; ``--grid`` for the parameter swe
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -538,8 +539,7 @@ def consistency(n: int) -> None:
     reported variances, per axis; 1 = consistent) and how often the largest model
     probability exceeds 0.99, for the multiple-model methods."""
     from defaults import SKIP, nominal_config
-    from seatrack.filters.registry import get_method
-    from seatrack.io.plots import PlotTrack
+    from seatrack.filters.registry import run
 
     scs = [SETS["fighter"].make(k) for k in seeds(n, True)]
     cfgs = {
@@ -554,10 +554,8 @@ def consistency(n: int) -> None:
     for label, (method, cfg) in cfgs.items():
         z2, pmax = [], []
         for sc in scs:
-            p = sc.plots
-            track = PlotTrack("1", p.t, p.range, p.azimuth, None, p.range_rate, p.sensor,
-                              p.sensor_vel, np.arange(len(p)))  # fmt: skip
-            cols = get_method(method)(track, {**nominal_config(sc), **cfg})
+            plots = dataclasses.replace(sc.plots, elevation=None)
+            cols = run(method, plots, {**nominal_config(sc), **cfg})
             ex = (cols["x_m"] - sc.truth[:, 0]) / cols["std_x_m"]
             ey = (cols["y_m"] - sc.truth[:, 1]) / cols["std_y_m"]
             z2.append(((ex**2 + ey**2) / 2)[SKIP:])

@@ -23,7 +23,7 @@ ones use the unbiased converted measurement of :mod:`seatrack.filters.converted`
   converted positions.
 * ``imm-rr``    -- the same IMM with the range rate in the (extended) update.
 * ``ekf``       -- single CV EKF on the polar plots with range rate
-  (:func:`seatrack.filters.ekf.run_ekf`).
+  (:class:`seatrack.filters.ekf.EKF`).
 
 Fair tuning: every filter's free noise parameters are chosen on separate TUNING seeds
 (40 runs per case, disjoint from the evaluation seeds) by minimum overall position RMSE
@@ -60,15 +60,11 @@ import numpy as np
 
 from seatrack.evaluate.metrics import chi2_interval, nees
 from seatrack.evaluate.montecarlo import format_table, run_seeds
+from seatrack.filters.base import Plots, SensorNoise, plot_gaussian
 from seatrack.filters.converted import convert_plots
-from seatrack.filters.ekf import run_ekf
-from seatrack.filters.multimodel import (
-    IMM_DEFAULTS,
-    MultiModelConfig,
-    MultiModelFilter,
-    imm_filter,
-)
-from seatrack.io.plots import PlotTrack
+from seatrack.filters.ekf import EKF, EKFConfig
+from seatrack.filters.imm import CVCTIMM, CVCTIMMConfig
+from seatrack.filters.multimodel import MultiModelConfig, MultiModelFilter
 from seatrack.simulate import Leg, NoiseModel, observe, trajectory
 
 EVAL_SEED = 4_2026_1123
@@ -181,21 +177,16 @@ def run_mm(
     return res.x, res.P
 
 
-def _imm_cfg(case: Case, q_cv: float, q_ct: float, q_omega: float, use_rr: bool) -> dict[str, Any]:
-    return {
-        **IMM_DEFAULTS,
-        "q_cv": q_cv,
-        "q_ct": q_ct,
-        "q_omega": q_omega,
-        "use_range_rate": use_rr,
-        "sigma_range_rate_mps": case.sigma_rr,
-    }
+def imm_filter(case: Case, q_cv: float, q_ct: float, q_omega: float, use_rr: bool) -> Any:
+    """The IMM engine of ``seatrack track --method imm`` (CV + coordinated turn)."""
+    cfg = CVCTIMMConfig(q_cv=q_cv, q_ct=q_ct, q_omega=q_omega, use_range_rate=use_rr)
+    return CVCTIMM(cfg, SensorNoise(sigma_range_rate=case.sigma_rr), 3, use_rr).imm
 
 
 def run_imm(
     b: Batch, case: Case, q_cv: float, q_ct: float, q_omega: float, use_rr: bool = False
 ) -> tuple[np.ndarray, np.ndarray]:
-    imm = imm_filter(_imm_cfg(case, q_cv, q_ct, q_omega, use_rr), 3)
+    imm = imm_filter(case, q_cv, q_ct, q_omega, use_rr)
     B, K = b.z.shape[:2]
     x0 = np.zeros((B, 6))
     x0[:, :3] = b.z[:, 0]
@@ -222,37 +213,28 @@ def run_imm(
     return xs, Ps
 
 
-def _plot_track(b: Batch, i: int) -> PlotTrack:
-    K = b.t.size
-    return PlotTrack(
-        str(i),
-        b.t,
-        b.rng_[i],
-        b.az[i],
-        b.el[i],
-        b.rr[i],
-        np.zeros((K, 3)),
-        np.zeros((K, 3)),
-        np.arange(K),
-    )
+def run_ekf_batch(
+    b: Batch, case: Case, q: float, tracks: slice = slice(None)
+) -> tuple[np.ndarray, np.ndarray]:
+    """The CV EKF of ``seatrack track --method ekf`` over the batch (all tracks at once)."""
+    sensor = SensorNoise(case.sigma_r, case.sigma_a, case.sigma_a, case.sigma_rr)
+    ekf = EKF(EKFConfig(q=q, initial_speed_sigma=V0_STD), sensor, d=3, range_rate=True)
+    rng, az, el, rr = b.rng_[tracks], b.az[tracks], b.el[tracks], b.rr[tracks]
+    B, K = rng.shape
 
+    def plots(k: int) -> Plots:
+        return Plots(np.full(B, b.t[k]), rng[:, k], az[:, k], el[:, k], rr[:, k])
 
-def _ekf_cfg(case: Case, q: float) -> dict[str, Any]:
-    return {
-        "q": q,
-        "sigma_range_m": case.sigma_r,
-        "sigma_azimuth_deg": case.sigma_a / DEG,
-        "sigma_elevation_deg": case.sigma_a / DEG,
-        "sigma_range_rate_mps": case.sigma_rr,
-        "use_range_rate": True,
-        "initial_speed_sigma_mps": V0_STD,
-    }
-
-
-def run_ekf_batch(b: Batch, case: Case, q: float) -> tuple[np.ndarray, np.ndarray]:
-    cfg = _ekf_cfg(case, q)
-    outs = [run_ekf(_plot_track(b, i), cfg) for i in range(b.z.shape[0])]
-    return np.array([o.x for o in outs]), np.array([o.P for o in outs])
+    first = plots(0)
+    s = ekf.initiate(first.t, *plot_gaussian(first, sensor, V0_STD, range_rate=False))
+    xs = np.empty((B, K, 6))
+    Ps = np.empty((B, K, 6, 6))
+    xs[:, 0], Ps[:, 0] = s.x, s.P
+    for k in range(1, K):
+        pk = plots(k)
+        s = ekf.update(ekf.predict(s, pk.t), pk)
+        xs[:, k], Ps[:, k] = s.x, s.P
+    return xs, Ps
 
 
 # ---------------------------------------------------------------------------
@@ -342,7 +324,7 @@ def single_track_us(name: str, case: Case, b: Batch, params: tuple[float, ...]) 
         elif name.startswith("imm"):
             run_imm_single(one, case, *params, use_rr=name == "imm-rr")
         else:
-            run_ekf(_plot_track(b, 0), _ekf_cfg(case, *params))
+            run_ekf_batch(b, case, *params, tracks=slice(0, 1))
         best = min(best, time.perf_counter() - t0)
     return best / K * 1e6
 
@@ -351,7 +333,7 @@ def run_imm_single(
     b: Batch, case: Case, q_cv: float, q_ct: float, q_omega: float, use_rr: bool
 ) -> None:
     """Single-track IMM loop (no batch dimension), as a user runs it."""
-    imm = imm_filter(_imm_cfg(case, q_cv, q_ct, q_omega, use_rr), 3)
+    imm = imm_filter(case, q_cv, q_ct, q_omega, use_rr)
     x0 = np.zeros(6)
     x0[:3] = b.z[0, 0]
     P0 = np.zeros((6, 6))

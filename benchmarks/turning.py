@@ -58,6 +58,7 @@ import numpy as np
 
 from seatrack.evaluate.metrics import rmse
 from seatrack.evaluate.montecarlo import format_table, run_seeds
+from seatrack.filters.base import SensorNoise
 from seatrack.filters.imm import IMM
 from seatrack.filters.turning import (
     TurningConfig,
@@ -210,18 +211,16 @@ SIGMA_V0 = {"aircraft": 300.0, "ship": 20.0}
 
 
 def turning_config(case: Case, **kw: float) -> TurningConfig:
+    return TurningConfig(sigma_velocity0=SIGMA_V0[case.name], **kw)
+
+
+def sensor_noise(case: Case) -> SensorNoise:
     s = case.sigma
-    return TurningConfig(
-        sigma_range=s[0],
-        sigma_azimuth=s[1],
-        sigma_elevation=s[2] if case.d == 3 else s[1],
-        sigma_velocity0=SIGMA_V0[case.name],
-        **kw,
-    )
+    return SensorNoise(s[0], s[1], s[2] if case.d == 3 else s[1])
 
 
 def run_turning(case: Case, b: Batch, cfg: TurningConfig) -> tuple[np.ndarray, np.ndarray]:
-    f = TurningFilter(cfg, case.d)
+    f = TurningFilter(cfg, case.d, sensor_noise(case))
     X, S = [], []
     for zz in b.z:
         res = f.run(b.t, zz)
@@ -337,7 +336,7 @@ def single_track_times(case: Case, b: Batch, cfg: TurningConfig, ip: IMMParams) 
     Rm = plot_covariance(*case.sigma, *([0.0] * (3 - case.d)), case.d)
 
     def turning() -> None:
-        f = TurningFilter(cfg, case.d)
+        f = TurningFilter(cfg, case.d, sensor_noise(case))
         for zz in zs:
             f.run(b.t, zz)
 

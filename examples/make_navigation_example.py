@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from seatrack.navigation.files import write_echoes, write_gyro
+from seatrack.io.navigation import write_echoes, write_gyro
 from seatrack.navigation.landmarks import write_map_csv
 from seatrack.simulate.radar_echoes import channel_landmarks, river_route, simulate_radar
 

@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from seatrack.geometry import knots_to_mps
-from seatrack.io.measurements_csv import write_bearings
 from seatrack.simulate import Leg, trajectory
+from seatrack.simulate.files import write_bearings
 from seatrack.simulate.tma import classic_scenario, scenario_from_trajectories
 
 HERE = Path(__file__).resolve().parent

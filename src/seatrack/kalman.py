@@ -11,7 +11,8 @@ The small, stable public API every method in seatrack builds on:
 
 Compiled building blocks, for other Numba kernels (e.g. a whole filter loop compiled in
 one piece) so that they reuse this update rather than re-deriving it:
-:func:`predict_core` ``(x, P, F, Q, xo, Po)``, :func:`update_core`
+:func:`predict_core` ``(x, P, F, Q, xo, Po)``, :func:`cov_core` ``(P, F, Q, Po)``
+(``Po = F P F^T + Q``), :func:`update_core`
 ``(x, P, y, H, R, xo, Po, So, Ko) -> (nis, loglik)`` (Joseph form, given the innovation),
 :func:`cholesky_core` ``(S, L) -> log det S``, :func:`forward_core` ``(L, y, w)`` and
 :func:`wrap_angle` (scalar wrap to ``(-pi, pi]``). They write into the output arrays
@@ -54,6 +55,8 @@ from numpy.typing import ArrayLike, NDArray
 FloatArray = NDArray[np.float64]
 
 __all__ = [
+    "cov_core",
+    "mahalanobis",
     "cholesky_core",
     "forward_core",
     "predict_core",
@@ -75,7 +78,7 @@ _LOG_2PI = math.log(2.0 * math.pi)
 # Compiled kernels (one core each, broadcast by the gufunc machinery)
 # ---------------------------------------------------------------------------
 @njit(cache=True)
-def _cov_core(P, F, Q, Po):  # pragma: no cover - compiled
+def cov_core(P, F, Q, Po):  # pragma: no cover - compiled
     """``Po = F P F^T + Q`` (symmetrised)."""
     n = P.shape[0]
     FP = np.empty((n, n))
@@ -104,7 +107,7 @@ def predict_core(x, P, F, Q, xo, Po):  # pragma: no cover - compiled
         for j in range(n):
             s += F[i, j] * x[j]
         xo[i] = s
-    _cov_core(P, F, Q, Po)
+    cov_core(P, F, Q, Po)
 
 
 @guvectorize(
@@ -124,7 +127,7 @@ def _predict_kernel(x, P, F, Q, xo, Po):  # pragma: no cover - compiled
     cache=True,
 )
 def _cov_predict_kernel(P, F, Q, Po):  # pragma: no cover - compiled
-    _cov_core(P, F, Q, Po)
+    cov_core(P, F, Q, Po)
 
 
 @njit(cache=True)
@@ -526,6 +529,28 @@ def extended_update(
     if check:
         _check(ll, S)
     return UpdateResult(xo, Po, y, S, nis, ll, K)
+
+
+@guvectorize(["void(f8[:], f8[:,:], f8[:])"], "(m),(m,m)->()", nopython=True, cache=True)
+def _mahalanobis_kernel(y, S, out):  # pragma: no cover - compiled
+    m = y.shape[0]
+    L = np.empty((m, m))
+    w = np.empty(m)
+    logdet = cholesky_core(S, L)
+    if not logdet == logdet:  # NaN: not positive definite
+        out[0] = np.nan
+        return
+    forward_core(L, y, w)
+    acc = 0.0
+    for i in range(m):
+        acc += w[i] * w[i]
+    out[0] = acc
+
+
+def mahalanobis(y: ArrayLike, S: ArrayLike) -> Any:
+    """``y^T S^-1 y`` over leading dimensions (compiled); NaN where ``S`` is not positive
+    definite or an input is not finite."""
+    return _mahalanobis_kernel(y, S)
 
 
 def nis_log_likelihood(y: ArrayLike, S: ArrayLike) -> tuple[Any, Any]:

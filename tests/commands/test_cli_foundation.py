@@ -10,8 +10,8 @@ import pytest
 from typer.testing import CliRunner
 
 from seatrack.cli import app, main
-from seatrack.io.measurements_csv import BEARING_COLUMNS, read_truth
-from seatrack.io.plots import read_plots
+from seatrack.io.plots import read_plot_tracks
+from seatrack.simulate.files import BEARING_COLUMNS, read_truth
 from seatrack.simulate.scenarios import bundled_scenario, load_scenario
 
 runner = CliRunner()
@@ -61,8 +61,8 @@ def test_simulate_writes_csv_that_round_trips(tmp_path):
     } <= files
     sc = load_scenario(bundled_scenario("demo"))
     sim = sc.simulate(np.random.default_rng(np.random.SeedSequence(sc.seed).spawn(1)[0]))
-    tracks = read_plots(tmp_path / "plots_radar.csv")
-    assert [t.track for t in tracks] == sc.target_names
+    tracks = read_plot_tracks(tmp_path / "plots_radar.csv")
+    assert [t.label for t in tracks] == sc.target_names
     radar = sim.sensor("radar")
     for t, m in zip(tracks, radar.measurements, strict=True):
         det = m.detected
@@ -99,7 +99,7 @@ def test_simulate_run_and_seed_options(tmp_path):
     assert pa != (c / "plots_radar.csv").read_text()
     sc = load_scenario(bundled_scenario("linear_cv"))
     sim = sc.simulate(np.random.default_rng(np.random.SeedSequence(sc.seed).spawn(3)[2]))
-    (t,) = read_plots(a / "plots_radar.csv")
+    (t,) = read_plot_tracks(a / "plots_radar.csv")
     np.testing.assert_array_equal(t.range, sim.sensors[0].measurements[0].z[:, 1])
 
 

@@ -78,7 +78,7 @@ def test_regressions_named_in_issue_13(tmp_path):
     assert r.code == 2 and r.err.startswith("error: --skip = 1000 must be in [0, 4]")
     sc.write_text(SHORT.replace("q = 2.0", 'q = "abc"'))
     r = run_cli("evaluate", sc, *FAST)
-    assert r.code == 2 and "evaluate.ekf.q = 'abc' is not a number" in r.err
+    assert r.code == 2 and "s.toml: evaluate.ekf: q: expected a number, got 'abc'" in r.err
     assert "could not convert" not in r.err
 
 

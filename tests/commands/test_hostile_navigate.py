@@ -15,9 +15,9 @@ from hostile_inputs import assert_clean, mutated_csv, run_cli, snapshot
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from seatrack.io.landmarks import write_map_csv
+from seatrack.io.navigation import NAV_COLUMNS, write_echoes, write_gyro
 from seatrack.io.table import read_csv_table
-from seatrack.navigation.files import NAV_COLUMNS, write_echoes, write_gyro
-from seatrack.navigation.landmarks import write_map_csv
 from seatrack.simulate.radar_echoes import channel_landmarks, river_route, simulate_radar
 
 PREVIOUS = b"previous output\n"

@@ -17,12 +17,12 @@ from test_hostile_tma import BEARINGS, SUPPORT
 from test_hostile_track import PLOTS
 
 from seatrack.io.ais import read_ais
-from seatrack.io.measurements_csv import read_truth, write_truth
+from seatrack.io.landmarks import read_map_csv
+from seatrack.io.navigation import read_echoes, read_gyro
 from seatrack.io.plots import read_plots
 from seatrack.io.table import InputError
 from seatrack.io.tma import read_bearings, read_support
-from seatrack.navigation.files import read_echoes, read_gyro
-from seatrack.navigation.landmarks import read_map_csv
+from seatrack.simulate.files import read_truth, write_truth
 from seatrack.simulate.scenarios import load_scenario
 from seatrack.simulate.trajectories import Leg, trajectory
 

@@ -11,8 +11,8 @@ from hostile_inputs import assert_clean, mutated_text, run_cli, snapshot
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from seatrack.io.measurements_csv import read_truth
 from seatrack.io.plots import read_plots
+from seatrack.simulate.files import read_truth
 
 #: a short scenario using every part of the format (two targets with legs, a radar with
 #: clutter and range rate, a passive sonar, a fixed sensor, method parameters)

@@ -76,23 +76,13 @@ def test_mutated_plots(tmp_path_factory, data, method):
     _run(tmp_path_factory.mktemp("track"), data.draw(mutated_csv(PLOTS)), method)
 
 
-@pytest.mark.xfail(
-    reason="method-config TOML values are not range/type checked (q = -1 -> 'S is not positive "
-    "definite', a list -> TypeError): the config-layer rewrite; strict",
-    strict=True,
-)
-@settings(max_examples=50, deadline=None, phases=NO_SHRINK)  # an expected failure: no shrinking
+@settings(max_examples=50, deadline=None)
 @given(data=st.data(), method=st.sampled_from(sorted(METHODS)))
 def test_mutated_config(tmp_path_factory, data, method):
     _run(tmp_path_factory.mktemp("trackcfg"), PLOTS.encode(), method,
          data.draw(mutated_text(CONFIG)))  # fmt: skip
 
 
-@pytest.mark.xfail(
-    reason="issue 13 item 1 (bad-plot isolation, status column): the track/filters rewrite; "
-    "strict, so this marker goes when that work lands",
-    strict=True,
-)
 @pytest.mark.parametrize("method", sorted(METHODS))
 def test_one_absurd_plot_is_isolated_or_named(tmp_path, method):
     """Issue 13 item 1: range 1e308 on one plot must not blank the rest of the track."""
@@ -104,7 +94,6 @@ def test_one_absurd_plot_is_isolated_or_named(tmp_path, method):
     assert not err or "plots.csv, line 6" in err, err
 
 
-@pytest.mark.xfail(reason="issue 13 item 8 (ekf ignores unknown keys): config rewrite", strict=True)
 def test_unknown_config_key_is_an_error_for_every_method(tmp_path):
     """Issue 13 item 8: a typo such as sigma_rnage_m must not be dropped silently."""
     failures = []

@@ -77,7 +77,7 @@ def test_method_config_and_sensor_choice():
 
 
 def test_every_method_accepts_the_sensor_keys_and_failures_are_reported(monkeypatch):
-    """The sensor sigmas go to every registered method (each accepts COMMON_CONFIG_KEYS);
+    """The sensor sigmas go to every registered method (each accepts SENSOR_KEYS);
     a method that raises is reported as a failed run, not fatal."""
     import seatrack.filters.registry as registry
 
@@ -86,15 +86,15 @@ def test_every_method_accepts_the_sensor_keys_and_failures_are_reported(monkeypa
     data = sc.simulate(np.random.default_rng(0)).sensor("radar")
     methods = list(registry.METHODS)
     cfg = {m: method_config(sc, s, m) for m in methods}
-    assert set(registry.COMMON_CONFIG_KEYS) - {"sigma_elevation_deg"} <= set(cfg["ekf"])
+    assert set(registry.SENSOR_KEYS) - {"sigma_elevation_deg"} <= set(cfg["ekf"])
     out = run_methods(data, methods, cfg)
     for m in methods:
         assert all(not r.error for r in out[m]), (m, [r.error for r in out[m]])
 
-    def broken(plots, config):
+    def broken(name, plots, config, source="config"):
         raise RuntimeError("boom")
 
-    monkeypatch.setattr(registry, "get_method", lambda name: broken)
+    monkeypatch.setattr(registry, "run", broken)
     out = run_methods(data, ["broken"], {"broken": {}})
     assert all(r.error == "RuntimeError: boom" for r in out["broken"])
 

@@ -158,3 +158,79 @@ def test_bad_transition_rejected():
         IMM([ConstantVelocity(), ConstantVelocity()], [[0.5, 0.4], [0.5, 0.5]], Position(n=4))
     with pytest.raises(ValueError, match="2x2"):
         IMM([ConstantVelocity(), ConstantVelocity()], [[1.0]], Position(n=4))
+
+
+# ---------------------------------------------------------------------------
+# FilterIMM: any filters honouring the contract as models
+# ---------------------------------------------------------------------------
+def _turn_plots(seed: int = 0):
+    import math
+
+    from seatrack.filters.base import Plots
+
+    tr = trajectory(
+        [6000.0, 9000.0], 2.0, 15.0,
+        [Leg.straight(120), Leg.turn(math.pi / 2, math.radians(3)), Leg.straight(120)], dt=2.0,
+    )  # fmt: skip
+    m = observe(
+        tr, None, ["range", "azimuth"], NoiseModel([10.0, 0.002]), np.random.default_rng(seed)
+    )
+    n = tr.t.size
+    plots = Plots(tr.t, m.z[:, 0], m.z[:, 1], track=np.full(n, "A"))
+    return tr, plots
+
+
+def _run(flt, plots, speed=30.0):
+    from seatrack.filters.base import SensorNoise, plot_gaussian, run_tracks
+
+    sensor = SensorNoise(10.0, 0.002)
+    return run_tracks(
+        flt, plots, np.zeros(len(plots), np.int64), lambda p: plot_gaussian(p, sensor, speed)
+    )
+
+
+def test_filter_imm_of_two_identical_filters_is_the_filter():
+    """Mixing two copies of one filter must give that filter exactly."""
+    from seatrack.filters.base import SensorNoise
+    from seatrack.filters.ekf import EKF, EKFConfig
+    from seatrack.filters.imm import FilterIMM
+
+    _, plots = _turn_plots()
+    ekf = EKF(EKFConfig(q=0.05), SensorNoise(10.0, 0.002))
+    one = _run(ekf, plots)
+    two = _run(FilterIMM([ekf, ekf], PI), plots)
+    for c in ("x_m", "y_m", "vx_mps", "std_x_m", "std_y_m"):
+        np.testing.assert_allclose(two[c], one[c], rtol=1e-9, atol=1e-9, err_msg=c)
+    # equal likelihoods: the model probabilities follow the Markov chain alone
+    mu = np.array([0.5, 0.5])
+    for k in range(1, len(plots)):
+        mu = mu @ PI
+        np.testing.assert_allclose(two["p_m0"][k], mu[0], rtol=1e-9)
+
+
+def test_filter_imm_of_turning_filter_and_cv_ekf():
+    """Issue 14: an IMM whose models are the turning filter and a CV EKF."""
+    from seatrack.filters.base import SensorNoise
+    from seatrack.filters.ekf import EKF, EKFConfig
+    from seatrack.filters.imm import FilterIMM
+    from seatrack.filters.turning import Turning, TurningConfig
+
+    tr, plots = _turn_plots(1)
+    sensor = SensorNoise(10.0, 0.002)
+    turning = Turning(TurningConfig(q_nominal=0.05), sensor)
+    cv = EKF(EKFConfig(q=0.01), sensor)
+    imm = FilterIMM([turning, cv], PI, names=("turning", "cv"))
+    out = _run(imm, plots)
+    assert out["status"][0] == "initiated" and (out["status"][1:] == "updated").all()
+    for c in ("x_m", "y_m", "vx_mps", "vy_mps", "std_x_m", "nis"):
+        assert np.isfinite(out[c][1:]).all(), c
+    np.testing.assert_allclose(out["p_turning"] + out["p_cv"], 1.0)
+    err = np.hypot(out["x_m"] - tr.pos[:, 0], out["y_m"] - tr.pos[:, 1])
+    late = slice(20, None)
+    # better than either model alone would not be guaranteed; it must track (within the
+    # plot noise) and weight the turning model up in the turn
+    alone = _run(cv, plots)
+    err_cv = np.hypot(alone["x_m"] - tr.pos[:, 0], alone["y_m"] - tr.pos[:, 1])
+    assert np.sqrt(np.mean(err[late] ** 2)) < np.sqrt(np.mean(err_cv[late] ** 2))
+    turn = (tr.t > 150) & (tr.t < 260)
+    assert out["p_turning"][turn].mean() > out["p_turning"][tr.t < 100][10:].mean()

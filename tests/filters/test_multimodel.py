@@ -14,12 +14,7 @@ from seatrack.filters.multimodel import (
     MultiModelFilter,
     MultiModelState,
     range_rate_row,
-    track_plots_imm,
-    track_plots_position,
-    track_plots_rangerate,
 )
-from seatrack.geometry import G0
-from seatrack.io.plots import PlotTrack
 from seatrack.models import numerical_jacobian
 from seatrack.models.measurement import range_rate
 from seatrack.simulate import Leg, NoiseModel, observe, trajectory
@@ -405,102 +400,6 @@ def test_range_rate_stabilises_straight_leg():
         if use:
             assert res.beta[:, 40:, 4].mean() > 0.95
     assert err[True] < 0.25 * err[False]
-
-
-# ---------------------------------------------------------------------------
-# Plot runners (seatrack track --method mm-rangerate | mm | imm)
-# ---------------------------------------------------------------------------
-def _plots(d3=True, moving=True, with_rr=True):
-    rng = np.random.default_rng(21)
-    tr = trajectory(
-        [1.5e4, 2.5e4, 2e3],
-        2.0,
-        220.0,
-        [Leg.straight(40), Leg.turn_g(np.pi / 2, 4, 220.0), Leg.straight(40)],
-        dt=2.0,
-    )
-    own = trajectory([0, 0, 0], 0.3, 8.0, [Leg.straight(200)], times=tr.t) if moving else None
-    comps = ("range", "azimuth", "elevation", "range_rate")
-    m = observe(tr, own, comps, NoiseModel([25.0, np.radians(0.3), np.radians(0.3), 0.8]), rng)
-    return tr, PlotTrack(
-        "7",
-        tr.t,
-        m.z[:, 0],
-        m.z[:, 1],
-        m.z[:, 2] if d3 else None,
-        m.z[:, 3] if with_rr else None,
-        m.sensor_pos,
-        m.sensor_vel,
-        np.arange(tr.t.size) + 2,
-    )
-
-
-@pytest.mark.parametrize("runner", [track_plots_rangerate, track_plots_position, track_plots_imm])
-def test_runners_columns_and_accuracy(runner):
-    tr, pt = _plots()
-    out = runner(pt, {"sigma_range_m": 25.0, "sigma_range_rate_mps": 0.8})
-    for c in ("x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps", "std_x_m", "std_y_m", "std_z_m"):
-        assert out[c].shape == (tr.t.size,) and np.all(np.isfinite(out[c]))
-    p = np.stack([out[c] for c in out if c.startswith("p_")], -1)
-    np.testing.assert_allclose(p.sum(-1), 1.0, atol=1e-12)
-    pos = np.stack([out["x_m"], out["y_m"], out["z_m"]], -1)
-    err = np.linalg.norm(pos - tr.pos, axis=1)
-    # plots have ~190 m cross-range noise per axis at ~30 km; on the first straight leg
-    # (scans 5-20, before the turn) every method must beat 400 m RMS. (Accuracy through
-    # the turn is what benchmarks/multimodel.py measures.)
-    assert np.sqrt(np.mean(err[5:20] ** 2)) < 400.0
-
-
-def test_runner_is_the_filter():
-    _, pt = _plots()
-    cfg = {"sigma_accel_mps2": 3.0, "p_stay": 0.8, "conversion": "linearized"}
-    out = track_plots_rangerate(pt, cfg)
-    from seatrack.filters.converted import convert_plots
-
-    cm = convert_plots(
-        pt.range,
-        pt.azimuth,
-        pt.elevation,
-        30.0,
-        np.radians(0.3),
-        np.radians(0.3),
-        sensor=pt.sensor,
-        method="linearized",
-    )
-    res = MultiModelFilter(MultiModelConfig(sigma_w=3.0, p_stay=0.8)).run(
-        pt.t, cm.z, cm.R, pt.range_rate, pt.sensor, pt.sensor_vel
-    )
-    np.testing.assert_allclose(out["vy_mps"], res.x[:, 4], rtol=1e-12)
-    np.testing.assert_allclose(out["std_z_m"], np.sqrt(res.P[:, 2, 2]), rtol=1e-12)
-    np.testing.assert_allclose(out["p_west_10g"], res.beta[:, 3], rtol=1e-12)
-
-
-def test_runner_names_and_2d():
-    tr, pt = _plots(d3=False)
-    out = track_plots_rangerate(pt, {})
-    assert {"p_north_10g", "p_east_10g", "p_south_10g", "p_west_10g", "p_cv"} <= set(out)
-    assert np.all(out["z_m"] == 0.0)
-    # 2-D tracking of a 3-D target at 2 km altitude: horizontal error dominated by the
-    # slant-range geometry; still a sane track
-    err = np.hypot(out["x_m"] - tr.pos[:, 0], out["y_m"] - tr.pos[:, 1])[5:]
-    assert np.median(err) < 600.0
-
-
-def test_runner_errors():
-    _, pt = _plots(with_rr=False)
-    with pytest.raises(ValueError, match="range_rate"):
-        track_plots_rangerate(pt, {})
-    with pytest.raises(ValueError, match="unknown config key"):
-        track_plots_position(pt, {"sigma_rang_m": 3})
-    out = track_plots_position(pt, {"accel_g": 5.0})
-    assert np.all(np.isfinite(out["x_m"]))
-
-
-def test_alpha_magnitude_config_scales_models():
-    cfg = MultiModelConfig(alphas=np.asarray(DEFAULT_ALPHAS) / 2)
-    assert np.isclose(np.abs(cfg.alpha_array(3)).max(), 5 * G0)
-    with pytest.raises(ValueError):
-        MultiModelConfig(alphas=[(0, 0, 1.0)], names=["up"]).alpha_array(2)
 
 
 def test_joint_range_rate_likelihood_is_the_stacked_gaussian():

@@ -8,7 +8,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from seatrack.evaluate.metrics import position_error
-from seatrack.filters.registry import get_method
 from seatrack.filters.robust import (
     BeamState,
     RobustConfig,
@@ -27,7 +26,6 @@ from seatrack.filters.robust import (
 )
 from seatrack.filters.robust_baselines import ekf_filter
 from seatrack.geometry import bearing, polar_to_cart, rotation_to_beam
-from seatrack.io.plots import PlotTrack
 from seatrack.models.motion import ca_transition, cv_noise_discrete, cv_transition
 from seatrack.simulate.marine import MarineScenario, simulate_runs
 
@@ -294,69 +292,6 @@ def test_bad_inputs_raise_clear_errors() -> None:
 # ---------------------------------------------------------------------------
 # seatrack track runners
 # ---------------------------------------------------------------------------
-def _plot_track(runs, b: int = 0) -> PlotTrack:
-    n = runs.t.size
-    sensor = np.zeros((n, 3))
-    sensor[:, :2] = runs.sensor[b]
-    return PlotTrack(
-        track="1",
-        t=runs.t,
-        range=runs.z[b, :, 0],
-        azimuth=runs.z[b, :, 1],
-        elevation=None,
-        range_rate=None,
-        sensor=sensor,
-        sensor_vel=np.gradient(sensor, runs.t, axis=0),
-        lines=np.arange(2, n + 2),
-    )
-
-
-@pytest.mark.parametrize("method", ["robust", "robust-adaptive"])
-def test_track_plots_runner(method: str) -> None:
-    r = simulate_runs(MarineScenario(steps=40), 1, 0.0, np.random.default_rng(4))
-    z = r.z.copy()
-    z[0, 25, 0] += 500.0
-    r = type(r)(r.t, z, r.outlier, r.sensor, r.truth, r.accel)
-    cols = get_method(method)(_plot_track(r), {"sigma_bearing_deg": 2.0, "window": 3})
-    for c in ("x_m", "y_m", "vx_mps", "std_x_m", "outlier_range", "outlier_bearing", "adapting"):
-        assert cols[c].shape == (40,)
-    assert cols["outlier_range"][25] == 1
-    assert set(np.unique(cols["adapting"])) <= {0, 1}
-    est = robust_filter(r.t, r.z, r.sensor, adaptive=method == "robust-adaptive")
-    np.testing.assert_allclose(cols["x_m"], est.x[0, :, 0])
-
-
-def test_config_mapping_rejects_unknown_keys_and_converts_degrees() -> None:
-    from seatrack.filters.robust import config_from_mapping
-
-    model, cfg = config_from_mapping(
-        {"sigma_bearing_deg": 2.0, "window": 4, "cap_j": False}, SonarModel, RobustConfig
-    )
-    assert model.sigma_bearing == pytest.approx(np.deg2rad(2.0))
-    assert cfg.window == 4 and not cfg.cap_j
-    with pytest.raises(ValueError, match="sigma_rnge"):
-        config_from_mapping({"sigma_rnge": 1.0}, SonarModel, RobustConfig)
-    with pytest.raises(ValueError, match="not both"):
-        config_from_mapping({"sigma_bearing": 0.1, "sigma_bearing_deg": 2.0}, SonarModel)
-
-
-def test_config_mapping_accepts_the_common_track_keys() -> None:
-    from seatrack.filters.robust import config_from_mapping
-
-    model, _ = config_from_mapping(
-        {
-            "sigma_range_m": 20.0,
-            "sigma_azimuth_deg": 0.5,
-            "sigma_elevation_deg": 0.3,  # 2-D filter: accepted and ignored
-            "sigma_range_rate_mps": 1.0,  # no range rate in this filter: ignored
-        },
-        SonarModel,
-        RobustConfig,
-    )
-    assert model.sigma_range == 20.0
-    assert model.sigma_bearing == pytest.approx(np.deg2rad(0.5))
-    with pytest.raises(ValueError, match="not both"):
-        config_from_mapping({"sigma_range_m": 2.0, "sigma_range": 2.0}, SonarModel)
 
 
 def test_robust_gain_switch_of_algorithm_a() -> None:

@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from seatrack.evaluate.metrics import position_error
-from seatrack.filters.registry import get_method
 from seatrack.filters.robust import SonarModel, robust_filter
 from seatrack.filters.robust_baselines import (
     HuberConfig,
@@ -16,7 +15,6 @@ from seatrack.filters.robust_baselines import (
     huber_filter,
     student_t_filter,
 )
-from seatrack.io.plots import PlotTrack
 from seatrack.simulate.marine import MarineScenario, SonarRuns, simulate_runs
 
 
@@ -199,24 +197,3 @@ def test_bad_configs_raise() -> None:
         StudentTConfig(nu=-1.0)
     with pytest.raises(ValueError, match="iterations"):
         StudentTConfig(iterations=0)
-
-
-@pytest.mark.parametrize("method", ["huber", "student-t", "ekf-rb"])
-def test_track_plots_runners(method: str, dirty: SonarRuns) -> None:
-    r = dirty
-    n = r.t.size
-    sensor = np.zeros((n, 3))
-    sensor[:, :2] = r.sensor[0]
-    plots = PlotTrack(
-        "1", r.t, r.z[0, :, 0], r.z[0, :, 1], None, None, sensor, np.zeros((n, 3)), np.arange(n)
-    )
-    cols = get_method(method)(plots, {"sigma_range": 1.5, "sigma_bearing_deg": 2.0})
-    for c in ("x_m", "y_m", "z_m", "std_y_m", "outlier_range", "outlier_bearing", "adapting"):
-        assert cols[c].shape == (n,)
-    assert not cols["adapting"].any()
-    assert set(np.unique(cols["outlier_bearing"])) <= {0, 1}
-    if method != "ekf-rb":
-        # anomalous bearings are flagged far more often than nominal ones
-        flagged = cols["outlier_bearing"].astype(bool)[1:]
-        true = r.outlier[0, 1:, 1]
-        assert flagged[true].mean() > 2 * flagged[~true].mean()

@@ -10,9 +10,8 @@ import pytest
 
 from seatrack import kalman
 from seatrack.filters import turning as T
-from seatrack.filters.registry import COMMON_COLUMNS, get_method
+from seatrack.filters.base import SensorNoise
 from seatrack.geometry import spherical_to_cart, wrap_pi
-from seatrack.io.plots import PlotTrack
 from seatrack.models import numerical_jacobian
 from seatrack.models.motion import cv_noise
 from seatrack.simulate import Leg, NoiseModel, observe, trajectory
@@ -249,8 +248,8 @@ def test_noiseless_turn_recovers_the_turn_rate(d, rate):
     tr = _turn_scenario(d, rate, course=10 * DEG)
     comps = ("range", "azimuth", "elevation")[:d]
     m = observe(tr, None, comps, NoiseModel([0.0] * d), np.random.default_rng(11))
-    cfg = T.TurningConfig(q_nominal=1.0, sigma_range=0.01, sigma_azimuth=1e-6, sigma_elevation=1e-6)
-    res = T.TurningFilter(cfg, d).run(m.t, m.z)
+    cfg = T.TurningConfig(q_nominal=1.0)
+    res = T.TurningFilter(cfg, d, SensorNoise(0.01, 1e-6, 1e-6)).run(m.t, m.z)
     late = m.t > 240.0  # last 2 minutes of the 4-minute turn
     np.testing.assert_allclose(res.turn_rate[late], rate, atol=0.01 * DEG)
     assert np.all(res.turn_rate_std[late] < cfg.sigma_omega0 / 10)
@@ -291,14 +290,8 @@ def test_gain_applies_to_the_next_scan_only_and_resets():
     m = observe(
         tr, None, ("range", "azimuth"), NoiseModel([30.0, 0.1 * DEG]), np.random.default_rng(2)
     )
-    cfg = T.TurningConfig(
-        q_nominal=0.5,
-        sigma_range=30.0,
-        sigma_azimuth=0.1 * DEG,
-        gain_reference=0.005,
-        delta_omega_threshold=0.01,
-    )
-    res = T.TurningFilter(cfg, 2).run(m.t, m.z)
+    cfg = T.TurningConfig(q_nominal=0.5, gain_reference=0.005, delta_omega_threshold=0.01)
+    res = T.TurningFilter(cfg, 2, SensorNoise(30.0, 0.1 * DEG)).run(m.t, m.z)
     fired = res.state != T.TurnState.STRAIGHT
     assert fired.any() and (res.q_gain > 1.0).any()  # the decision does fire in this turn
     np.testing.assert_array_equal(res.next_q_gain[~fired], 1.0)
@@ -347,73 +340,6 @@ def test_covariances_stay_symmetric_positive_definite():
 # ---------------------------------------------------------------------------
 # CLI runner
 # ---------------------------------------------------------------------------
-def _plot_track(d: int) -> PlotTrack:
-    tr = _turn_scenario(d, 3 * DEG)
-    comps = ("range", "azimuth", "elevation")[:d]
-    m = observe(
-        tr, None, comps, NoiseModel([30.0, 0.1 * DEG, 0.1 * DEG][:d]), np.random.default_rng(9)
-    )
-    n = m.t.size
-    return PlotTrack(
-        track="a",
-        t=m.t,
-        range=m.z[:, 0],
-        azimuth=m.z[:, 1],
-        elevation=m.z[:, 2] if d == 3 else None,
-        range_rate=None,
-        sensor=np.zeros((n, 3)),
-        sensor_vel=np.zeros((n, 3)),
-        lines=np.arange(2, n + 2),
-    )
-
-
-@pytest.mark.parametrize("d", [2, 3])
-def test_track_plots_columns(d):
-    run = get_method("turning")
-    plots = _plot_track(d)
-    cfg = {"sigma_range_m": 30.0, "sigma_azimuth_deg": 0.1, "sigma_elevation_deg": 0.1, "q": 1.0}
-    out = run(plots, cfg)
-    n = len(plots)
-    for c in (
-        *COMMON_COLUMNS,
-        "speed_mps",
-        "heading_deg",
-        "turn_rate_dps",
-        "turn_state",
-        "q_gain",
-    ):
-        assert out[c].shape == (n,), c
-    assert np.isnan(out["z_m"]).all() == (d == 2)
-    assert set(out["turn_state"]) <= {"straight", "rising", "falling"}
-    assert np.all((out["heading_deg"] >= 0) & (out["heading_deg"] < 360))
-    assert np.all(out["q_gain"] >= 1.0)
-    late = plots.t > 240.0
-    assert np.median(out["turn_rate_dps"][late]) == pytest.approx(3.0, abs=0.3)
-    ref = T.TurningFilter(T.config_from_mapping(cfg), d).run(
-        plots.t, np.stack([plots.range, plots.azimuth] + ([plots.elevation] if d == 3 else []), -1)
-    )
-    np.testing.assert_allclose(out["x_m"], ref.x[:, 0])
-
-
-def test_track_plots_unknown_config_key():
-    with pytest.raises(ValueError, match="unknown config key 'sigma_rng'"):
-        get_method("turning")(_plot_track(2), {"sigma_rng": 3.0})
-
-
-def test_config_accepts_every_common_track_key():
-    from seatrack.filters.registry import COMMON_CONFIG_KEYS
-
-    cfg = T.config_from_mapping({k: 1.0 for k in COMMON_CONFIG_KEYS})
-    assert cfg.sigma_range == 1.0 and cfg.sigma_azimuth == pytest.approx(DEG)
-
-
-def test_config_from_mapping_converts_degrees():
-    cfg = T.config_from_mapping(
-        {"sigma_azimuth_deg": 0.2, "delta_omega_threshold_dps": 1.0, "queue_length": 6, "q": 2.0}
-    )
-    assert cfg.sigma_azimuth == pytest.approx(0.2 * DEG)
-    assert cfg.delta_omega_threshold == pytest.approx(DEG)
-    assert cfg.queue_length == 6 and cfg.q_nominal == 2.0
 
 
 def test_kalman_core_used_for_heading_update():
@@ -432,7 +358,7 @@ def test_velocity_threshold_defaults_to_number_of_components():
     """S2: the heading filter starts only once d_t > N (N = 2 or 3 by default)."""
     for d in (2, 3):
         f = T.TurningFilter(T.TurningConfig(), d)
-        assert f._v_threshold == float(d)
+        assert f.filter.v_threshold == float(d)
     f = T.TurningFilter(T.TurningConfig(velocity_threshold=1e12), 2)
     tr = _turn_scenario(2, 3 * DEG)
     m = observe(
@@ -451,6 +377,6 @@ def test_velocity_threshold_defaults_to_number_of_components():
 def test_heading_options_run_and_recover_the_turn_rate(kw):
     tr = _turn_scenario(2, 3 * DEG)
     m = observe(tr, None, ("range", "azimuth"), NoiseModel([0.0, 0.0]), np.random.default_rng(1))
-    cfg = T.TurningConfig(q_nominal=1.0, sigma_range=0.01, sigma_azimuth=1e-6, **kw)
-    res = T.TurningFilter(cfg, 2).run(m.t, m.z)
+    cfg = T.TurningConfig(q_nominal=1.0, **kw)
+    res = T.TurningFilter(cfg, 2, SensorNoise(0.01, 1e-6)).run(m.t, m.z)
     np.testing.assert_allclose(res.turn_rate[m.t > 240.0], 3 * DEG, atol=0.01 * DEG)

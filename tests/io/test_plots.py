@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from seatrack.io.plots import read_plots
+from seatrack.io.plots import read_plot_tracks, read_plots
 from seatrack.io.table import InputError
 
 
@@ -11,13 +11,16 @@ def test_reads_tracks_converts_units_and_sensor_velocity(tmp_path):
         "track,time_s,range_m,azimuth_deg,sensor_x_m,sensor_y_m\n"
         "A,0,1000,90,0,0\nA,2,1010,91,10,0\nB,0,500,359.5,0,0\nA,4,1020,92,20,0\n"
     )
-    tr = read_plots(p)
-    assert [t.track for t in tr] == ["A", "B"]
+    tr = read_plot_tracks(p)
+    assert [t.label for t in tr] == ["A", "B"]
     a = tr[0]
     assert len(a) == 3 and not a.is_3d and a.range_rate is None
     np.testing.assert_allclose(a.azimuth, np.radians([90, 91, 92]))
     np.testing.assert_allclose(a.sensor_vel[:, 0], 5.0)
-    assert a.lines.tolist() == [2, 3, 5]
+    np.testing.assert_allclose(tr[1].sensor_vel, 0.0)  # one plot: no velocity
+    assert a.line.tolist() == [2, 3, 5]
+    allp = read_plots(p)  # all plots in file order, each with its label
+    assert allp.track.tolist() == ["A", "A", "B", "A"]
 
 
 @pytest.mark.parametrize(
@@ -32,6 +35,14 @@ def test_reads_tracks_converts_units_and_sensor_velocity(tmp_path):
         (
             "time_s,range_m,azimuth_deg,range_rate_mps\n0,100,10,1\n1,100,10,\n",
             "line 3: column range_rate_mps is empty here",
+        ),
+        ("track,time_s,range_m,azimuth_deg\nA,0,100,10\n,1,100,10\n", "line 3: empty track id"),
+        ("time_s,range_m,azimuth_deg\n0,100,10\n1,1e308,10\n", "line 3: range_m = 1e.308 is impl"),
+        ("time_s,range_m,azimuth_deg\n0,100,10\n1e15,100,10\n", "line 3: time_s = 1e.15 is impl"),
+        ("time_s,range_m,azimuth_deg\n0,100,10\n2e6,100,10\n", "line 3: time gap of 2e.06 s"),
+        (
+            "time_s,range_m,azimuth_deg,range_rate_mps\n0,100,10,1\n1,100,10,1e9\n",
+            "line 3: range_rate_mps = 1e.09 is implausible",
         ),
     ],
 )

@@ -80,3 +80,19 @@ def test_batch_shapes():
     J = m.jacobian(X)
     np.testing.assert_allclose(J[2, 1], m.jacobian(X[2, 1]))
     assert Position(n=4).jacobian(X[..., :4]).shape == (7, 3, 2, 4)
+
+
+@pytest.mark.parametrize("d", [2, 3])
+@pytest.mark.parametrize("rr", [False, True])
+def test_compiled_polar_measurement_equals_the_model_objects(d, rr):
+    from seatrack.models.measurement import polar_measurement
+
+    rng = np.random.default_rng(d + 2 * rr)
+    x = np.concatenate([rng.normal(0, 3000, (9, d)), rng.normal(0, 20, (9, d))], -1)
+    s = np.concatenate([rng.normal(0, 100, (9, d)), rng.normal(0, 5, (9, d))], -1)
+    base = RangeBearing(n=2 * d) if d == 2 else RangeBearingElevation(n=2 * d)
+    pos, vel = tuple(range(d)), tuple(range(d, 2 * d))
+    m = Stacked([base, RangeRate(n=2 * d, pos=pos, vel=vel)]) if rr else base
+    hx, H = polar_measurement(x, s, d, rr)
+    np.testing.assert_allclose(hx, m.h(x, s), rtol=1e-12, atol=1e-9)
+    np.testing.assert_allclose(H, m.jacobian(x, s), rtol=1e-12, atol=1e-15)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from seatrack.filters.base import PlotStatus
 from seatrack.models import numerical_jacobian
 from seatrack.models.motion import cv_noise
 from seatrack.navigation.filter import (
@@ -96,26 +97,40 @@ def test_ekf_and_srif_agree_on_a_sequence():
     rng = np.random.default_rng(11)
     x0 = STATES[0]
     P0 = np.diag([400.0, 400.0, 0.003, 1.0, 1.0, 1e-4])
-    ekf, srif = KalmanNav(x0, P0), SRIFNav(x0, P0)
-    np.testing.assert_allclose(srif.x, x0, atol=1e-9)
-    np.testing.assert_allclose(srif.P, P0, rtol=1e-9)
+    ekf, srif = KalmanNav(), SRIFNav()
+    se, ss = ekf.initiate(0.0, x0, P0), srif.initiate(0.0, x0, P0)
+    np.testing.assert_allclose(ss.x[0], x0, atol=1e-9)
+    np.testing.assert_allclose(ss.P[0], P0, rtol=1e-9)
+    t = 0.0
     for k in range(300):
-        dt = 0.156 * rng.uniform(0.2, 1.0)
-        ekf.predict(dt)
-        srif.predict(dt)
-        np.testing.assert_allclose(ekf.x, srif.x, atol=1e-9)
+        t += 0.156 * rng.uniform(0.2, 1.0)
+        se, ss = ekf.predict(se, t), srif.predict(ss, t)
+        np.testing.assert_allclose(se.x, ss.x, atol=1e-9)
         lm = LANDMARKS[k % 2]
         if k % 3 == 0:
-            H = point_rows(ekf.x, lm, 10.0)
+            H = point_rows(se.x[0], lm, 10.0)
             y = rng.normal(0, 3.0, 2)
             R = np.diag(rng.uniform(4.0, 30.0, 2))
         elif k % 3 == 1:
-            H = contour_row(ekf.x, lm, 0.4, 10.0)[None, :]
+            H = contour_row(se.x[0], lm, 0.4, 10.0)[None, :]
             y, R = rng.normal(0, 3.0, 1), np.array([[9.0]])
         else:
             H, y, R = gyro_row()[None, :], rng.normal(0, 1e-3, 1), np.array([[1e-6]])
-        ekf.update(y, H, R)
-        srif.update(y, H, R)
-    np.testing.assert_allclose(ekf.x, srif.x, atol=1e-6)
-    np.testing.assert_allclose(ekf.P, srif.P, atol=1e-6 * np.abs(ekf.P).max())
-    assert np.all(np.linalg.eigvalsh(ekf.P) > 0)
+        se, ss = ekf.update(se, y, H, R), srif.update(ss, y, H, R)
+        assert se.status[0] == ss.status[0] == PlotStatus.UPDATED
+        np.testing.assert_allclose(se.nis, ss.nis, rtol=1e-6)
+    np.testing.assert_allclose(se.x, ss.x, atol=1e-6)
+    np.testing.assert_allclose(se.P, ss.P, atol=1e-6 * np.abs(se.P).max())
+    assert np.all(np.linalg.eigvalsh(se.P[0]) > 0)
+
+
+@pytest.mark.parametrize("cls", [KalmanNav, SRIFNav])
+def test_unusable_measurement_is_rejected_state_kept(cls):
+    flt = cls()
+    s = flt.predict(flt.initiate(0.0, STATES[0], np.eye(6)), 1.0)
+    bad = flt.update(s, [np.nan], gyro_row()[None, :], [[1e-6]])
+    assert bad.status[0] == PlotStatus.REJECTED
+    np.testing.assert_array_equal(bad.x, s.x)
+    neg = flt.update(s, [0.1], gyro_row()[None, :], [[-100.0]])  # S not positive definite
+    assert neg.status[0] == PlotStatus.REJECTED
+    np.testing.assert_array_equal(neg.x, s.x)

@@ -34,6 +34,8 @@ def config_error(path: str, method: str, table: Mapping[str, Any], error: str) -
     A string where the method wants a number is named by its key (``evaluate.ekf.q =
     'abc' is not a number``); any other failure is reported with the table's key path.
     """
+    if error.startswith("ConfigError: "):  # the config layer names the key already
+        return InputError(f"{path}: {error.removeprefix('ConfigError: ')}")
     for k, v in table.items():
         if isinstance(v, str) and f"to float: {v!r}" in error:
             return InputError(f"{path}: evaluate.{method}.{k} = {v!r} is not a number")
@@ -87,18 +89,9 @@ def register(app: typer.Typer) -> None:
         the 95% chi-square bounds, and the time per plot. Results do not depend on
         --processes.
         """
-        import csv
-
-        from rich.console import Console
-
-        from seatrack.evaluate.metrics import chi2_interval
-        from seatrack.evaluate.montecarlo import format_table, rich_table
         from seatrack.evaluate.tracking import (
-            SUMMARY_COLUMNS,
             compare_methods,
-            method_config,
             position_crb,
-            run_methods,
             summarize,
             tracking_sensor,
         )
@@ -125,78 +118,126 @@ def register(app: typer.Typer) -> None:
         check_skip(skip, sens.scan_times(sc.duration).size, sens.name)
         pngs = [plots / "pos_rmse.png", plots / "anees.png"] if plots is not None else []
         prepare_outputs([csv_out, *pngs], [plots])
-        # one trial run in this process: reports why a method cannot run on this scenario
-        # and compiles the numba kernels before the timed runs (not part of the statistics)
-        trial = sc.simulate(np.random.default_rng(np.random.SeedSequence(s).spawn(1)[0]))
-        configs = {m: method_config(sc, sens, m) for m in names}
-        errors = {}
-        for m, rr in run_methods(trial.sensor(sens.name), names, configs).items():
-            errors[m] = next((r.error for r in rr if r.error), "")
-            if errors[m] and m in sc.extra:  # the scenario configured it: its table is wrong
-                raise config_error(sc.path, m, sc.extra[m], errors[m])
+        errors = trial_errors(sc, sens, names, s)
         res = compare_methods(
             sc, names, n, s, sensor=sens.name, processes=processes, progress=progress
         )
         dims = 3 if "elevation" in sens.components else 2
         crb = position_crb(sc, sens.name)
         rows = summarize(res, names, dims=dims, skip=skip, crb=crb)
-        lo, hi = chi2_interval(1, n)
         title = f"{sc.name}: {n} runs, seed {s}, sensor {sens.name}, {len(sc.targets)} target(s)"
-        console = Console()
-        if console.is_terminal:
-            console.print(rich_table(rows, SUMMARY_COLUMNS, title=title))
-        else:
-            typer.echo(f"{title}\n{format_table(rows, SUMMARY_COLUMNS)}")
-        console.print(
-            f"ANEES 95% bounds per step (1 dof, {n} runs): [{lo:.3f}, {hi:.3f}]; "
-            f"{res.elapsed_s:.1f} s"
-        )
-        for m, e in errors.items():
-            if e:
-                typer.echo(f"{m} failed on this scenario: {e}")
-        if crb is not None:
-            rms = float(np.sqrt(np.nanmean(crb[:, skip:] ** 2)))
-            console.print(
-                f"position CRB (constant-velocity truth, no process noise): {rms:.1f} m RMS"
-            )
+        print_summary(rows, title, n, res.elapsed_s, errors, crb, skip)
         if csv_out is not None:
-            from seatrack.io.atomic import atomic_write
-
-            with atomic_write(csv_out, newline="") as fh:
-                w = csv.DictWriter(fh, [c.key for c in SUMMARY_COLUMNS], extrasaction="ignore")
-                w.writeheader()
-                w.writerows(rows)
-            console.print(f"wrote {csv_out}")
-        if plots is not None:
-            from seatrack.evaluate.tracking import time_histories
-            from seatrack.report.plots import error_figure, save
-
+            write_summary_csv(csv_out, rows)
+            typer.echo(f"wrote {csv_out}")
+        if pngs:
             ok = [m for m in names if not errors[m]]
-            hist = time_histories(res, ok, dims=dims)
-            t = sens.scan_times(sc.duration)
-            bounds = None
-            if crb is not None:
-                finite = np.all(np.isfinite(crb), axis=0)  # NaN while not yet observable
-                rms_crb = np.full(crb.shape[1], np.nan)
-                rms_crb[finite] = np.sqrt(np.mean(crb[:, finite] ** 2, axis=0))
-                bounds = {"CRB": rms_crb}
-            fig = error_figure(
-                t,
-                {m: hist[m]["pos_rmse"] for m in ok},
-                "position RMSE (m)",
-                title=title,
-                bounds=bounds,
-                logy=True,
-            )
-            p1 = save(fig, pngs[0])
-            fig = error_figure(
-                t,
-                {m: 0.5 * (hist[m]["anees_x"] + hist[m]["anees_y"]) for m in ok},
-                "ANEES, mean of x and y (1 dof each)",
-                title=title,
-                # one axis's 95 % bounds: conservative for the mean of the two axes
-                hlines={f"95% bounds of one axis ({n} runs)": lo, "_upper": hi},
-                logy=True,
-            )
-            p2 = save(fig, pngs[1])
-            console.print(f"wrote {p1} and {p2}")
+            write_error_plots(res, ok, dims, sens.scan_times(sc.duration), crb, title, n, pngs)
+            typer.echo(f"wrote {pngs[0]} and {pngs[1]}")
+
+
+def trial_errors(sc: Any, sens: Any, names: list[str], seed: int) -> dict[str, str]:
+    """One trial run in this process, before the timed runs (not part of the statistics):
+    it compiles the numba kernels and reports why a method cannot run on this scenario
+    (a method the scenario configured in ``[evaluate.<method>]`` failing is a scenario error).
+    """
+    from seatrack.evaluate.tracking import method_config, run_methods
+
+    trial = sc.simulate(np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0]))
+    configs = {m: method_config(sc, sens, m) for m in names}
+    errors = {}
+    for m, rr in run_methods(trial.sensor(sens.name), names, configs).items():
+        errors[m] = next((r.error for r in rr if r.error), "")
+        if errors[m] and m in sc.extra:
+            raise config_error(sc.path, m, sc.extra[m], errors[m])
+    return errors
+
+
+def print_summary(
+    rows: list[dict[str, Any]],
+    title: str,
+    n: int,
+    elapsed_s: float,
+    errors: Mapping[str, str],
+    crb: Any,
+    skip: int,
+) -> None:
+    """The summary table (rich on a terminal), the ANEES bounds, failures and the CRB."""
+    from rich.console import Console
+
+    from seatrack.evaluate.metrics import chi2_interval
+    from seatrack.evaluate.montecarlo import format_table, rich_table
+    from seatrack.evaluate.tracking import SUMMARY_COLUMNS
+
+    lo, hi = chi2_interval(1, n)
+    console = Console()
+    if console.is_terminal:
+        console.print(rich_table(rows, SUMMARY_COLUMNS, title=title))
+    else:
+        typer.echo(f"{title}\n{format_table(rows, SUMMARY_COLUMNS)}")
+    console.print(
+        f"ANEES 95% bounds per step (1 dof, {n} runs): [{lo:.3f}, {hi:.3f}]; {elapsed_s:.1f} s"
+    )
+    for m, e in errors.items():
+        if e:
+            typer.echo(f"{m} failed on this scenario: {e}")
+    if crb is not None:
+        rms = float(np.sqrt(np.nanmean(crb[:, skip:] ** 2)))
+        console.print(f"position CRB (constant-velocity truth, no process noise): {rms:.1f} m RMS")
+
+
+def write_summary_csv(path: Path, rows: list[dict[str, Any]]) -> None:
+    """The summary table as CSV (atomic)."""
+    import csv
+
+    from seatrack.evaluate.tracking import SUMMARY_COLUMNS
+    from seatrack.io.atomic import atomic_write
+
+    with atomic_write(path, newline="") as fh:
+        w = csv.DictWriter(fh, [c.key for c in SUMMARY_COLUMNS], extrasaction="ignore")
+        w.writeheader()
+        w.writerows(rows)
+
+
+def write_error_plots(
+    res: Any,
+    names: list[str],
+    dims: int,
+    t: Any,
+    crb: Any,
+    title: str,
+    n: int,
+    pngs: list[Path],
+) -> None:
+    """Position RMSE (with the RMS CRB when it applies) and ANEES against time, as PNGs."""
+    from seatrack.evaluate.metrics import chi2_interval
+    from seatrack.evaluate.tracking import time_histories
+    from seatrack.report.plots import error_figure, save
+
+    hist = time_histories(res, names, dims=dims)
+    bounds = None
+    if crb is not None:
+        finite = np.all(np.isfinite(crb), axis=0)  # NaN while not yet observable
+        rms_crb = np.full(crb.shape[1], np.nan)
+        rms_crb[finite] = np.sqrt(np.mean(crb[:, finite] ** 2, axis=0))
+        bounds = {"CRB": rms_crb}
+    fig = error_figure(
+        t,
+        {m: hist[m]["pos_rmse"] for m in names},
+        "position RMSE (m)",
+        title=title,
+        bounds=bounds,
+        logy=True,
+    )
+    save(fig, pngs[0])
+    lo, hi = chi2_interval(1, n)
+    fig = error_figure(
+        t,
+        {m: 0.5 * (hist[m]["anees_x"] + hist[m]["anees_y"]) for m in names},
+        "ANEES, mean of x and y (1 dof each)",
+        title=title,
+        # one axis's 95 % bounds: conservative for the mean of the two axes
+        hlines={f"95% bounds of one axis ({n} runs)": lo, "_upper": hi},
+        logy=True,
+    )
+    save(fig, pngs[1])

@@ -9,7 +9,7 @@ mapped landmarks (JP H03-66630, spec ``landmark_nav.md``).
 (with the matching ``--gyro`` and ``--start``; a single ``--start`` serves all); the map
 is corrected from the passages and written.
 
-File formats: see :mod:`seatrack.navigation.files` and :mod:`seatrack.navigation.landmarks`.
+File formats: see :mod:`seatrack.io.navigation` and :mod:`seatrack.io.landmarks`.
 """
 
 from __future__ import annotations
@@ -122,8 +122,8 @@ def register(app: typer.Typer) -> None:
         origin: str | None = origin_opt,
     ) -> None:
         """Own-ship position and heading from radar echoes of mapped landmarks (JP H03-66630)."""
-        from seatrack.navigation.files import read_echoes, read_gyro, write_nav
-        from seatrack.navigation.landmarks import read_map_csv
+        from seatrack.io.landmarks import read_map_csv
+        from seatrack.io.navigation import read_echoes, read_gyro, write_nav
         from seatrack.navigation.navigator import navigate
 
         cfg = _config(antenna_period, range_limit, antenna_offset, method, clutter_density)
@@ -167,8 +167,8 @@ def register(app: typer.Typer) -> None:
         origin: str | None = origin_opt,
     ) -> None:
         """Correct a landmark map from recorded passages; flag poorly visible landmarks."""
-        from seatrack.navigation.files import read_echoes, read_gyro
-        from seatrack.navigation.landmarks import read_map_csv, write_map_csv
+        from seatrack.io.landmarks import read_map_csv, write_map_csv
+        from seatrack.io.navigation import read_echoes, read_gyro
         from seatrack.navigation.navigator import navigate
         from seatrack.navigation.survey import SurveyConfig, survey
 

@@ -38,7 +38,7 @@ def write_simulation(sim: Any, out: Path) -> list[tuple[Path, int]]:
     Returns (path, rows) for each file.
     """
     from seatrack.io.atomic import atomic_files
-    from seatrack.io.measurements_csv import write_bearings, write_clutter, write_plots, write_truth
+    from seatrack.simulate.files import write_bearings, write_clutter, write_plots, write_truth
 
     paths = simulation_files(sim.scenario, out)
     prepare_outputs(paths, [out])

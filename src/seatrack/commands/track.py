@@ -1,56 +1,75 @@
-"""``seatrack track PLOTS.csv --method NAME [--config FILE] --out TRACK.csv``."""
+"""``seatrack track PLOTS.csv --method NAME [--config FILE] --out TRACK.csv``.
+
+Reads the plots as columns, runs the method over all tracks of the file at once
+(:func:`seatrack.filters.registry.run`) and writes the columns with pyarrow's CSV writer,
+atomically (:mod:`seatrack.io.atomic`): no per-row Python loop on either side.
+"""
 
 from __future__ import annotations
 
-import csv
-import tomllib
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import typer
+from numpy.typing import NDArray
 
-from seatrack.io.table import InputError
+__all__ = ["register", "write_track_csv", "track_table"]
 
-
-def load_config(path: Path | None) -> dict[str, Any]:
-    """Read a method configuration TOML file (flat keys, SI units unless named)."""
-    if path is None:
-        return {}
-    if not path.is_file():
-        raise InputError(f"{path}: configuration file not found")
-    try:
-        with path.open("rb") as fh:
-            return tomllib.load(fh)
-    except tomllib.TOMLDecodeError as exc:
-        raise InputError(f"{path}: not valid TOML ({exc})") from None
+_DECIMALS = 6
 
 
-def write_track_csv(path: Path, rows: list[tuple[str, np.ndarray, dict[str, np.ndarray]]]) -> int:
-    """Write TRACK.csv: ``track, time_s``, the common columns, then method-specific ones."""
-    from seatrack.filters.registry import COMMON_COLUMNS
+def _column(v: NDArray[Any]) -> Any:
+    """A pyarrow array: floats rounded to 6 decimals with NaN written empty."""
+    import pyarrow as pa
 
-    extra: list[str] = []
-    for _, _, cols in rows:
-        extra += [c for c in cols if c not in COMMON_COLUMNS and c not in extra]
-    header = ["track", "time_s", *COMMON_COLUMNS, *extra]
-    n = 0
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with path.open("w", newline="") as fh:
-        w = csv.writer(fh)
-        w.writerow(header)
-        for tid, t, cols in rows:
-            for i in range(t.size):
-                out: list[Any] = [tid, f"{t[i]:.6f}"]
-                for c in header[2:]:
-                    v = cols[c][i] if c in cols else ""
-                    if isinstance(v, (float, np.floating)):
-                        out.append("" if not np.isfinite(v) else f"{float(v):.6f}")
-                    else:
-                        out.append(v.item() if isinstance(v, np.generic) else v)
-                w.writerow(out)
-                n += 1
-    return n
+    a = np.asarray(v)
+    if a.dtype.kind == "f":
+        return pa.array(np.round(a, _DECIMALS), mask=~np.isfinite(a))
+    if a.dtype.kind in "US":
+        return pa.array(a.astype(str))
+    return pa.array(a)
+
+
+def track_table(labels: NDArray[Any], t: NDArray[Any], cols: Mapping[str, NDArray[Any]]) -> Any:
+    """The TRACK.csv table: ``track, time_s`` then the method's columns, rows grouped by
+    track (order of first appearance, time order within a track)."""
+    import pyarrow as pa
+
+    from seatrack.filters.registry import track_index
+
+    ti, _ = track_index(labels)
+    order = np.argsort(ti, kind="stable")
+    names = ["track", "time_s", *cols]
+    arrays = [_column(labels[order]), _column(t[order])]
+    arrays += [_column(np.asarray(v)[order]) for v in cols.values()]
+    return pa.table(arrays, names=names)
+
+
+def write_track_csv(
+    path: Path, labels: NDArray[Any], t: NDArray[Any], cols: Mapping[str, NDArray[Any]]
+) -> int:
+    """Write TRACK.csv atomically; returns the number of rows.
+
+    Values are quoted only where needed (a track id holding a comma or a quote)."""
+    import pyarrow as pa
+    import pyarrow.csv as pacsv
+
+    from seatrack.io.atomic import atomic_write
+
+    table = track_table(labels, t, cols)
+    with atomic_write(path, "wb") as fh:
+        fh.write((",".join(table.column_names) + "\n").encode())
+        try:
+            pacsv.write_csv(
+                table, fh, pacsv.WriteOptions(include_header=False, quoting_style="none")
+            )
+        except pa.ArrowInvalid:  # a value needs quoting: start the body again, quoted
+            fh.seek(0)
+            fh.truncate()
+            pacsv.write_csv(table, fh, pacsv.WriteOptions(quoting_style="needed"))
+    return int(table.num_rows)
 
 
 def register(app: typer.Typer) -> None:
@@ -66,7 +85,11 @@ def register(app: typer.Typer) -> None:
             "[elevation_deg], [range_rate_mps], [sensor_x_m, sensor_y_m, sensor_z_m]",
         ),
         method: str = typer.Option("ekf", "--method", "-m", help=f"filter: {names}"),
-        config: Path | None = typer.Option(None, "--config", help="TOML file of method parameters"),
+        config: Path | None = typer.Option(
+            None,
+            "--config",
+            help="TOML file: method keys, and the sensor keys flat or in a [sensor] table",
+        ),
         out: Path = typer.Option(..., "--out", "-o", help="TRACK.csv to write (one row per plot)"),
         all_tracks: bool = typer.Option(
             False, "--all-tracks", help="unlabelled plots: also tentative tracks"
@@ -84,11 +107,12 @@ def register(app: typer.Typer) -> None:
         """Run a tracking filter over recorded radar/sonar plots (without a track column:
         the multi-target tracker, see docs/tracking.md)."""
         from seatrack.commands.options import prepare_outputs
-        from seatrack.filters.registry import get_method
-        from seatrack.io.atomic import atomic_path
+        from seatrack.config import load_toml
+        from seatrack.filters.registry import method_class, run
         from seatrack.io.multitarget import has_track_column, track_unlabelled
         from seatrack.io.plots import read_plots
 
+        method_class(method)  # unknown method: fail before any work
         if not has_track_column(plots_csv):
             typer.echo(
                 track_unlabelled(
@@ -96,26 +120,13 @@ def register(app: typer.Typer) -> None:
                 )
             )
             return
-
-        runner = get_method(method)
-        cfg = load_config(config)
-        for k, v in cfg.items():  # the config layer checks ranges; here: no NaN / inf
-            if isinstance(v, float) and not np.isfinite(v):
-                raise InputError(f"{config}: {k} = {v} is not a finite number")
         prepare_outputs([out])
-        tracks = read_plots(plots_csv)
-        rows = []
-        for pt in tracks:
-            try:
-                cols = runner(pt, cfg)
-            except ValueError as exc:  # a configuration problem names the file it is in
-                if config is not None and "key" in str(exc) and not isinstance(exc, InputError):
-                    raise InputError(f"{config}: {exc}") from None
-                raise
-            bad = [c for c, v in cols.items() if len(v) != len(pt)]
-            if bad:  # pragma: no cover - a method bug, not user input
-                raise RuntimeError(f"method {method} returned wrong-length columns {bad}")
-            rows.append((pt.track, pt.t, cols))
-        with atomic_path(out) as tmp:
-            n = write_track_csv(tmp, rows)
-        typer.echo(f"{method}: {len(tracks)} track(s), {n} rows written to {out}")
+        table = load_toml(config) if config is not None else {}
+        plots = read_plots(plots_csv)
+        cols = run(method, plots, table, source=str(config) if config else "config")
+        assert plots.track is not None
+        n = write_track_csv(out, plots.track, plots.t, cols)
+        n_tracks = len(set(plots.track.tolist()))
+        rejected = int(np.count_nonzero(cols["status"] == "rejected"))
+        note = f", {rejected} plot(s) rejected (status column)" if rejected else ""
+        typer.echo(f"{method}: {n_tracks} track(s), {n} rows written to {out}{note}")

@@ -2,7 +2,7 @@
 
 Each run simulates the scenario (:meth:`seatrack.simulate.scenarios.Scenario.simulate`),
 turns each target's detections of one active sensor into an in-memory
-:class:`~seatrack.io.plots.PlotTrack` and runs every selected method of
+:class:`~seatrack.filters.base.Plots` and runs every selected method of
 :data:`seatrack.filters.registry.METHODS` on it. Outputs are put back on the full scan grid
 (NaN where a scan was missed), so runs stack into fixed-size arrays.
 
@@ -30,7 +30,7 @@ from numpy.typing import NDArray
 
 from seatrack.evaluate.metrics import chi2_interval, rms_over_time
 from seatrack.evaluate.montecarlo import Column, MonteCarloResult, monte_carlo
-from seatrack.io.measurements_csv import plots_from_measurements
+from seatrack.simulate.files import plots_from_measurements
 from seatrack.simulate.scenarios import Scenario, SensorConfig, SensorData
 
 FloatArray = NDArray[np.float64]
@@ -85,7 +85,7 @@ def method_config(scenario: Scenario, sensor: SensorConfig, method: str) -> dict
 
     The sensor's noise standard deviations go in as ``sigma_azimuth_deg``,
     ``sigma_range_m``, ``sigma_elevation_deg``, ``sigma_range_rate_mps`` -- the keys every
-    track method accepts (:data:`seatrack.filters.registry.COMMON_CONFIG_KEYS`); a scenario
+    track method accepts (:data:`seatrack.filters.registry.SENSOR_KEYS`); a scenario
     table ``[evaluate.<method>]`` adds or overrides keys.
     """
     cfg: dict[str, Any] = {}
@@ -135,11 +135,10 @@ def run_methods(
     -------
     dict method -> list (one per target) of MethodRun
     """
-    from seatrack.filters.registry import get_method
+    from seatrack.filters.registry import run
 
     out: dict[str, list[MethodRun]] = {}
     for name in methods:
-        fn = get_method(name)
         cfg = dict(configs.get(name, {}))
         runs = []
         for j, meas in enumerate(data.measurements):
@@ -150,7 +149,7 @@ def run_methods(
             plots = plots_from_measurements(meas, str(j))
             t0 = time.perf_counter()
             try:
-                cols = fn(plots, cfg)
+                cols = run(name, plots, cfg, source=f"evaluate.{name}")
             except Exception as exc:  # a failing method is reported, not fatal
                 if not catch:
                     raise
@@ -159,7 +158,7 @@ def run_methods(
                 )
                 continue
             dt = time.perf_counter() - t0
-            idx = plots.lines
+            idx = plots.line
             for k, a in enumerate(_AXES):
                 pos[idx, k] = cols[f"{a}_m"]
                 vel[idx, k] = cols[f"v{a}_mps"]

@@ -40,15 +40,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from seatrack import kalman
 from seatrack.config import param
-from seatrack.geometry import spherical_to_cart
-from seatrack.models.measurement import (
-    RangeBearing,
-    RangeBearingElevation,
-    RangeRate,
-    Stacked,
-    range_bearing_elevation_jacobian,
-    range_bearing_jacobian,
-)
+from seatrack.filters.converted import convert_plots, polar_jacobian
+from seatrack.geometry import spherical_to_cart, wrap_pi
+from seatrack.models.measurement import RangeBearing, RangeBearingElevation, RangeRate, Stacked
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -64,7 +58,15 @@ __all__ = [
     "plot_gaussian",
     "two_point_gaussian",
     "common_columns",
+    "cartesian_names",
+    "converted_positions",
+    "conversion_param",
+    "speed_sigma_param",
+    "usable",
     "finish_update",
+    "predicted",
+    "step_times",
+    "wrap_angles",
     "run_tracks",
     "COMMON_COLUMNS",
 ]
@@ -141,6 +143,11 @@ class Plots:
         return self.elevation is not None
 
     @property
+    def label(self) -> str:
+        """The track label of single-track plots ("" when unlabelled)."""
+        return "" if self.track is None or len(self.track) == 0 else str(self.track[0])
+
+    @property
     def has_range_rate(self) -> bool:
         return self.range_rate is not None
 
@@ -170,6 +177,14 @@ class Plots:
             self.line[ix],
             sub(self.track),
         )
+
+    def horizontal(self) -> Plots:
+        """2-D plots of these plots: horizontal range ``r cos(elevation)``, no elevation
+        (for the methods that track in the horizontal plane only)."""
+        if self.elevation is None:
+            return self
+        rng = self.range * np.cos(self.elevation)
+        return dataclasses.replace(self, range=rng, elevation=None)
 
     def polar(self, range_rate: bool = True) -> FloatArray:
         """Measurement vectors ``(N, m)``: range, azimuth, [elevation], [range rate]."""
@@ -352,6 +367,61 @@ class SensorNoise:
     )  # fmt: skip
 
 
+def speed_sigma_param(default: float, aliases: Sequence[str] = ()) -> Any:
+    """The ``initial_speed_sigma`` field every method's config has (key
+    ``initial_speed_sigma_mps``): the velocity std per axis the initiator gives a new track."""
+    return param(
+        default,
+        key="initial_speed_sigma_mps",
+        unit="m/s",
+        doc="velocity std of a new track (per axis)",
+        min=0,
+        exclusive_min=True,
+        aliases=aliases,
+    )
+
+
+def conversion_param() -> Any:
+    """The ``conversion`` field of the methods on converted plots."""
+    return param(
+        "unbiased", choices=("unbiased", "linearized"), doc="polar-to-Cartesian conversion"
+    )
+
+
+def cartesian_names(d: int) -> tuple[str, ...]:
+    """``x, y, [z], vx, vy, [vz]``: the first components of every filter's state."""
+    axes = ("x", "y", "z")[:d]
+    return axes + tuple("v" + a for a in axes)
+
+
+def converted_positions(
+    plots: Plots, sensor: SensorNoise, method: str
+) -> tuple[FloatArray, FloatArray]:
+    """Converted Cartesian plot positions ``(N, d)`` and covariances ``(N, d, d)``
+    (:func:`seatrack.filters.converted.convert_plots`); absurd plots give non-finite
+    values, without warnings."""
+    with np.errstate(all="ignore"):
+        cm = convert_plots(
+            plots.range,
+            plots.azimuth,
+            plots.elevation,
+            sensor.sigma_range,
+            sensor.sigma_azimuth,
+            sensor.sigma_elevation if plots.elevation is not None else None,
+            sensor=plots.sensor,
+            method=method,  # type: ignore[arg-type]
+        )
+    return cm.z, cm.R
+
+
+def usable(z: FloatArray, hx: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """Plots ``z (B, m)`` with every unusable (non-finite) one replaced by its prediction
+    ``hx`` -- so that an update runs without warnings -- and the mask of the usable ones
+    (pass it to :func:`finish_update` as ``ok``)."""
+    ok = np.asarray(np.isfinite(z).all(-1), dtype=bool)
+    return np.where(ok[:, None], z, np.where(np.isfinite(hx), hx, 0.0)), ok
+
+
 def measurement_model(d: int, n: int, range_rate: bool) -> Any:
     """Polar measurement model of plots for a state with positions ``0..d-1`` and velocities
     ``d..2d-1`` in a state of size ``n``: range, azimuth, [elevation], [range rate]."""
@@ -422,18 +492,15 @@ class RecursiveFilter(Protocol):
 # Initiation: one plot or two plots -> Cartesian Gaussian
 # ---------------------------------------------------------------------------
 def _polar_position_cov(plots: Plots, sensor: SensorNoise) -> tuple[FloatArray, FloatArray]:
-    """Cartesian positions ``(N, d)`` and their linearised covariances ``(N, d, d)``."""
+    """Cartesian positions ``(N, d)`` and their linearised covariances ``(N, d, d)``
+    (``G R G^T`` with ``G`` the Jacobian of the polar-to-Cartesian conversion). An absurd
+    plot gives non-finite values, never a warning: the caller rejects it."""
     d = plots.d
-    p = plots.positions()
-    rel = p - plots.sensor[:, :d]
-    if d == 2:
-        J = range_bearing_jacobian(rel)  # d(range, az)/d(x, y)
-        Rp = np.diag([sensor.sigma_range**2, sensor.sigma_azimuth**2])
-    else:
-        J = range_bearing_elevation_jacobian(rel)
-        Rp = np.diag([sensor.sigma_range**2, sensor.sigma_azimuth**2, sensor.sigma_elevation**2])
-    G = np.linalg.inv(J)  # d(x, y)/d(range, az): J is invertible for range > 0
-    C = G @ Rp @ np.swapaxes(G, -1, -2)
+    sig = [sensor.sigma_range, sensor.sigma_azimuth, sensor.sigma_elevation][:d]
+    with np.errstate(all="ignore"):
+        p = plots.positions()
+        G = polar_jacobian(plots.range, plots.azimuth, plots.elevation)
+        C = (G * np.square(sig)[None, None, :]) @ np.swapaxes(G, -1, -2)
     return p, kalman.symmetrize(C)
 
 
@@ -456,12 +523,13 @@ def plot_gaussian(
     P[:, :d, :d] = C
     Pv = np.broadcast_to(np.eye(d) * speed_sigma**2, (N, d, d)).copy()
     if range_rate and plots.range_rate is not None:
-        u = p - plots.sensor[:, :d]
-        u /= np.linalg.norm(u, axis=-1, keepdims=True)
-        vr = plots.range_rate + np.einsum("ij,ij->i", u, plots.sensor_vel[:, :d])
-        x[:, d:] = u * vr[:, None]
-        uu = u[:, :, None] * u[:, None, :]
-        Pv = Pv - uu * (speed_sigma**2 - sensor.sigma_range_rate**2)
+        with np.errstate(all="ignore"):  # an absurd plot: non-finite start, rejected
+            u = p - plots.sensor[:, :d]
+            u /= np.linalg.norm(u, axis=-1, keepdims=True)
+            vr = plots.range_rate + np.einsum("ij,ij->i", u, plots.sensor_vel[:, :d])
+            x[:, d:] = u * vr[:, None]
+            uu = u[:, :, None] * u[:, None, :]
+            Pv = Pv - uu * (speed_sigma**2 - sensor.sigma_range_rate**2)
     P[:, d:, d:] = Pv
     return x, P
 
@@ -509,6 +577,38 @@ def common_columns(x: FloatArray, P: FloatArray, d: int) -> dict[str, FloatArray
         "std_y_m": std[:, 1],
         "std_z_m": std[:, 2] if d == 3 else nan,
     }
+
+
+def wrap_angles(y: FloatArray, angular: FloatArray) -> FloatArray:
+    """Wrap the components of innovations ``y (..., m)`` flagged in ``angular (m,)`` to
+    ``(-pi, pi]``."""
+    return np.where(np.asarray(angular) > 0, wrap_pi(y), y)
+
+
+def step_times(state: TrackState, t: ArrayLike) -> tuple[FloatArray, FloatArray]:
+    """Target times ``(B,)`` of a prediction and the intervals ``dt = t - state.t`` (s).
+
+    Raises ``ValueError`` when a track would go back in time.
+    """
+    tt = np.broadcast_to(np.asarray(t, dtype=float), state.t.shape).copy()
+    dt = tt - state.t
+    if np.any(dt < 0):
+        raise ValueError("predict: a track would go back in time")
+    return tt, dt
+
+
+def predicted(
+    state: TrackState,
+    t: FloatArray,
+    x: FloatArray,
+    P: FloatArray,
+    aux: Mapping[str, Any] | None = None,
+) -> TrackState:
+    """A predicted batch: new ``t``, ``x``, ``P`` (and ``aux`` entries), status PREDICTED,
+    no NIS / likelihood."""
+    nan = np.full(len(state), np.nan)
+    status = np.full(len(state), PlotStatus.PREDICTED, np.int8)
+    return TrackState(t, x, P, nan, nan.copy(), status, {**state.aux, **(aux or {})})
 
 
 def finish_update(
@@ -581,30 +681,64 @@ def run_tracks(
     by_rank = np.argsort(rank, kind="stable")
     bounds = np.searchsorted(rank[by_rank], np.arange(int(rank.max()) + 2))
     out: dict[str, NDArray[Any]] = {}
-    state: TrackState | None = None
-    for k in range(bounds.size - 1):
+    ids = np.arange(T)
+    rows = by_rank[bounds[0] : bounds[1]]  # the first plot of every track
+    state = _start(flt, initiate, plots.take(rows[np.argsort(ti[rows])]))
+    _emit(flt, state, rows[np.argsort(ti[rows])], out, N)
+    started = state.status == PlotStatus.INITIATED
+    for k in range(1, bounds.size - 1):
         rows = by_rank[bounds[k] : bounds[k + 1]]
         tracks = ti[rows]
         pk = plots.take(rows)
-        if k == 0:
-            x0, P0 = initiate(pk)
-            s = flt.initiate(pk.t, x0, P0)
-            full = s.take(np.argsort(tracks))  # batch position == track number
-            state = full
-        else:
-            assert state is not None
-            s = flt.update(flt.predict(state.take(tracks), pk.t), pk)
-            state = state.put(tracks, s)
-        cols = flt.columns(s)
-        cols["status"] = s.status
-        cols["nis"] = s.nis
-        for name, v in cols.items():
-            arr = out.get(name)
-            if arr is None:
-                arr = out[name] = np.empty(N, dtype=np.asarray(v).dtype)
-            arr[rows] = v
-    out["status"] = np.array([PlotStatus(int(s)).label for s in out["status"]])
+        if tracks.size == T and started.all() and np.array_equal(tracks, ids):
+            state = flt.update(flt.predict(state, pk.t), pk)  # every track, in order
+            _emit(flt, state, rows, out, N)
+            continue
+        new = ~started[tracks]
+        if new.any():  # tracks whose start was rejected: start again on this plot
+            s = _start(flt, initiate, pk.take(new))
+            state = state.put(tracks[new], s)
+            started[tracks[new]] = s.status == PlotStatus.INITIATED
+            _emit(flt, s, rows[new], out, N)
+        run = ~new
+        if run.any():
+            s = flt.update(flt.predict(state.take(tracks[run]), pk.t[run]), pk.take(run))
+            state = state.put(tracks[run], s)
+            _emit(flt, s, rows[run], out, N)
+    labels = np.array([s.label for s in PlotStatus])
+    out["status"] = labels[out["status"]]
     return out
+
+
+def _start(
+    flt: RecursiveFilter,
+    initiate: Callable[[Plots], tuple[FloatArray, FloatArray]],
+    plots: Plots,
+) -> TrackState:
+    """Initiate tracks on plots; a plot that gives a non-finite start is REJECTED (the
+    track starts on its next plot)."""
+    with np.errstate(all="ignore"):
+        x0, P0 = initiate(plots)
+    s = flt.initiate(plots.t, x0, P0)
+    ok = np.isfinite(s.x).all(-1) & np.isfinite(s.P).all((-1, -2))
+    if ok.all():
+        return s
+    status = np.where(ok, PlotStatus.INITIATED, PlotStatus.REJECTED).astype(np.int8)
+    return s.replace(status=status)
+
+
+def _emit(
+    flt: RecursiveFilter, s: TrackState, rows: IntArray, out: dict[str, NDArray[Any]], N: int
+) -> None:
+    """Write the output columns of batch ``s`` at ``rows``."""
+    cols = flt.columns(s)
+    cols["status"] = s.status
+    cols["nis"] = s.nis
+    for name, v in cols.items():
+        arr = out.get(name)
+        if arr is None:
+            arr = out[name] = np.empty(N, dtype=np.asarray(v).dtype)
+        arr[rows] = v
 
 
 def check_finite_state(state: TrackState) -> bool:

@@ -35,18 +35,42 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numba import guvectorize
 from numpy.typing import ArrayLike, NDArray
 
 from seatrack import kalman
+from seatrack.config import param
+from seatrack.filters.base import (
+    Plots,
+    SensorNoise,
+    TrackState,
+    common_columns,
+    conversion_param,
+    converted_positions,
+    finish_update,
+    predicted,
+    speed_sigma_param,
+    step_times,
+)
+from seatrack.models.measurement import Position, RangeRate, Stacked
 from seatrack.models.motion import MotionModel
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["IMM", "IMMState", "IMMStep", "mix", "combine"]
+__all__ = [
+    "IMM",
+    "IMMState",
+    "IMMStep",
+    "mix",
+    "combine",
+    "check_transition",
+    "CVCTIMM",
+    "CVCTIMMConfig",
+    "FilterIMM",
+]
 
 
 @dataclass
@@ -218,6 +242,14 @@ def combine(
     return _combine_kernel(X, P, c, ll, o)  # type: ignore[no-any-return]
 
 
+def check_transition(transition: FloatArray, M: int) -> None:
+    """Raise ValueError unless ``transition`` is an ``M x M`` matrix of rows summing to one."""
+    if transition.shape != (M, M):
+        raise ValueError(f"transition must be {M}x{M}, got {transition.shape}")
+    if np.any(transition < 0) or not np.allclose(transition.sum(axis=1), 1.0):
+        raise ValueError("transition rows must be probabilities summing to 1 ([i, j] = P(j | i))")
+
+
 class IMM:
     """Interacting Multiple Model estimator over a bank of motion models.
 
@@ -251,12 +283,7 @@ class IMM:
         if M < 1:
             raise ValueError("IMM needs at least one model")
         self.transition = np.asarray(transition, dtype=float)
-        if self.transition.shape != (M, M):
-            raise ValueError(f"transition must be {M}x{M}, got {self.transition.shape}")
-        if np.any(self.transition < 0) or not np.allclose(self.transition.sum(axis=1), 1.0):
-            raise ValueError(
-                "transition rows must be probabilities summing to 1 ([i, j] = P(j | i))"
-            )
+        check_transition(self.transition, M)
         names = [tuple(m.state_names) for m in self.models]
         union: list[str] = []
         for n in names:
@@ -283,7 +310,7 @@ class IMM:
             and all(getattr(m, "is_linear", False) for m in self.models)
             and all(H is not None for H in self._H)
         )
-        self._Hs = np.stack(self._H) if self._fused else None  # type: ignore[arg-type]
+        self.fused_H = np.stack(self._H) if self._fused else None  # type: ignore[arg-type]
         self.mu0 = np.full(M, 1.0 / M) if mu0 is None else np.asarray(mu0, dtype=float)
         self._cache: dict[tuple[int, float], tuple[FloatArray, FloatArray]] = {}
 
@@ -334,6 +361,8 @@ class IMM:
                 if len(self._cache) < 64:
                     self._cache[key] = FQ
             return kalman.predict(x, P, FQ[0], FQ[1])
+        if hasattr(model, "predict"):  # compiled nonlinear prediction (e.g. CoordinatedTurn)
+            return model.predict(x, P, dt)  # type: ignore[no-any-return]
         fx, F = model.transition(x, dt)
         return kalman.extended_predict(fx, P, F, model.noise(dt))
 
@@ -371,13 +400,21 @@ class IMM:
         return IMMState(X, P, c)
 
     def update(
-        self, predicted: IMMState, z: ArrayLike, R: ArrayLike, sensor: ArrayLike | None = None
+        self,
+        predicted: IMMState,
+        z: ArrayLike,
+        R: ArrayLike,
+        sensor: ArrayLike | None = None,
+        check: bool = True,
     ) -> IMMStep:
-        """Model-matched updates, model probabilities (log space), combination."""
+        """Model-matched updates, model probabilities (log space), combination.
+
+        ``check=False``: a non-positive-definite innovation covariance gives NaN estimates
+        for that element instead of raising (see :func:`seatrack.kalman.update`)."""
         M = len(self.models)
-        if self._Hs is not None and sensor is None:
+        if self.fused_H is not None and sensor is None:
             zz = np.asarray(z, dtype=float)[..., None, :]
-            res = kalman.update(predicted.X, predicted.P, zz, self._Hs, R)
+            res = kalman.update(predicted.X, predicted.P, zz, self.fused_H, R, check)
             mu, x, Pc, tot = combine(res.x, res.P, predicted.mu, res.log_likelihood, self._out)
             return IMMStep(IMMState(res.x, res.P, mu), x, Pc, tot, res.log_likelihood, res.nis)
         X = predicted.X.copy()
@@ -391,10 +428,10 @@ class IMM:
             Pj = np.ascontiguousarray(Pj)
             H = self._H[j]
             if H is not None and sensor is None:
-                res = kalman.update(x, Pj, z, H, R)
+                res = kalman.update(x, Pj, z, H, R, check)
             else:
                 res = kalman.extended_update(
-                    x, Pj, z, hm.h(x, sensor), hm.jacobian(x, sensor), R, hm.angular
+                    x, Pj, z, hm.h(x, sensor), hm.jacobian(x, sensor), R, hm.angular, check
                 )
             self._store(X, P, j, res.x, res.P)
             ll[..., j] = res.log_likelihood
@@ -418,3 +455,269 @@ class IMM:
         zero = np.zeros(state.mu.shape)
         _, x, P, _ = combine(state.X, state.P, state.mu, zero, self._out)
         return x, P
+
+
+# ---------------------------------------------------------------------------
+# The filter contract
+# ---------------------------------------------------------------------------
+def _common_dt(dt: FloatArray) -> Any:
+    """A scalar interval when every track of the batch has the same one (cached, fused
+    matrices), else the per-track array."""
+    return float(dt[0]) if dt.size and np.all(dt == dt[0]) else dt
+
+
+@dataclass(frozen=True)
+class CVCTIMMConfig:
+    """Parameters of ``--method imm``: CV + coordinated turn on converted plots (the noise
+    defaults were chosen on the tuning seeds of ``benchmarks/multimodel.py``, 2 s scans)."""
+
+    q_cv: float = param(0.01, unit="m^2/s^3", doc="CV white-noise acceleration PSD", min=0)
+    q_ct: float = param(100.0, unit="m^2/s^3", doc="CT white-noise acceleration PSD", min=0)
+    q_omega: float = param(1e-3, unit="rad^2/s^3", doc="CT turn-rate PSD", min=0)
+    p_stay: float = param(0.95, doc="IMM transition diagonal", min=0, max=1)
+    conversion: str = conversion_param()
+    initial_speed_sigma: float = speed_sigma_param(300.0, aliases=("initial_velocity_std_mps",))
+    initial_turn_rate_sigma: float = param(
+        5.0,
+        key="initial_turn_rate_std_dps",
+        unit="deg/s",
+        doc="turn-rate std of a new track",
+        min=0,
+        exclusive_min=True,
+    )
+    use_range_rate: bool = param(False, doc="stack the range rate with the converted position")
+
+
+class CVCTIMM:
+    """The reference IMM (CV + coordinated turn) on the filter contract (``--method imm``).
+
+    Measurements are the converted plot positions (linear update), or, with
+    ``use_range_rate``, positions stacked with the range rate (extended update).
+    ``TrackState.x``/``P`` hold the combined estimate on ``x, y, [z], vx, vy, [vz]``;
+    ``aux`` the padded model states ``X (B, M, n)``, ``PP (B, M, n, n)`` and the model
+    probabilities ``mu (B, M)`` (after :meth:`predict`: the predicted ``c_j``).
+    """
+
+    Config = CVCTIMMConfig
+    dims: ClassVar[tuple[int, ...]] = (2, 3)
+
+    def __init__(
+        self,
+        config: CVCTIMMConfig | None = None,
+        sensor: SensorNoise | None = None,
+        d: int = 2,
+        range_rate: bool = False,
+    ) -> None:
+        from seatrack.models.motion import ConstantVelocity, CoordinatedTurn
+
+        self.config = c = config or CVCTIMMConfig()
+        self.sensor = sensor or SensorNoise()
+        self.d = d
+        self.range_rate = bool(range_rate and c.use_range_rate)
+        models: list[Any] = [
+            ConstantVelocity(q=c.q_cv, d=d),
+            CoordinatedTurn(q=c.q_ct, q_omega=c.q_omega, d=d),
+        ]
+        pos = tuple(range(d))
+        meas: list[Any] = []
+        for m in models:
+            n = m.ndim_state
+            p = Position(n=n, pos=pos)
+            rr = RangeRate(n=n, pos=pos, vel=tuple(range(d, 2 * d)))
+            meas.append(Stacked([p, rr]) if self.range_rate else p)
+        self.imm = IMM(models, [[c.p_stay, 1 - c.p_stay], [1 - c.p_stay, c.p_stay]], meas)
+        self._w = self.imm.union_names.index("w")
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return tuple(self.imm.output_names)
+
+    def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
+        sw = self.config.initial_turn_rate_sigma
+        st = self.imm.initial_state(x, P, extra={"w": (0.0, sw**2)})
+        return TrackState.new(t, x, P, {"X": st.X, "PP": st.P, "mu": st.mu})
+
+    @staticmethod
+    def _engine(state: TrackState) -> IMMState:
+        a = state.aux
+        return IMMState(a["X"], a["PP"], a["mu"])
+
+    def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
+        tt, dt = step_times(state, t)
+        pr = self.imm.predict(self._engine(state), _common_dt(dt))
+        x, P = self.imm.combined(pr)
+        return predicted(state, tt, x, P, {"X": pr.X, "PP": pr.P, "mu": pr.mu})
+
+    def _measurement(self, plots: Plots) -> tuple[FloatArray, FloatArray, Any]:
+        """Converted positions (with range rate when used), their covariances, the sensor
+        state of the range-rate model (None without range rate)."""
+        sn, d = self.sensor, self.d
+        z, R = converted_positions(plots, sn, self.config.conversion)
+        if not self.range_rate or plots.range_rate is None:
+            return z, R, None
+        # Position.h subtracts the sensor position given with the range-rate sensor state
+        zr = np.concatenate([z - plots.sensor[:, :d], plots.range_rate[:, None]], -1)
+        Rr = np.zeros((len(plots), d + 1, d + 1))
+        Rr[:, :d, :d] = R
+        Rr[:, d, d] = sn.sigma_range_rate**2
+        sensor = np.concatenate([plots.sensor[:, :d], plots.sensor_vel[:, :d]], -1)
+        return zr, Rr, sensor
+
+    def _innovation(
+        self, state: TrackState, z: FloatArray, R: FloatArray, sensor: Any
+    ) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Predicted measurement of the combined state, innovation and its covariance."""
+        m = self.imm.measurement[0]  # output components come first in every model
+        with np.errstate(all="ignore"):
+            hx = m.h(state.x, sensor)
+            H = m.jacobian(state.x, sensor)
+            S = H @ state.P @ np.swapaxes(H, -1, -2) + R
+        return hx, z - hx, S
+
+    def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
+        z, R, sensor = self._measurement(plots)
+        _, y, S = self._innovation(state, z, R, sensor)
+        return y, S
+
+    def update(self, state: TrackState, plots: Plots) -> TrackState:
+        z, R, sensor = self._measurement(plots)
+        hx, y, S = self._innovation(state, z, R, sensor)
+        ok = np.asarray(
+            np.isfinite(z).all(-1) & np.isfinite(R).all((-1, -2)) & np.isfinite(hx).all(-1),
+            dtype=bool,
+        )
+        z = np.where(ok[:, None], z, np.where(np.isfinite(hx), hx, 0.0))
+        R = np.where(ok[:, None, None], R, np.eye(R.shape[-1]))
+        Rk = R[:, None] if self.imm.fused_H is not None and sensor is None else R
+        with np.errstate(all="ignore"):
+            res = self.imm.update(self._engine(state), z, Rk, sensor, check=False)
+        nis = kalman.mahalanobis(y, S)
+        aux = {"X": res.state.X, "PP": res.state.P, "mu": res.state.mu}
+        return finish_update(state, res.x, res.P, nis, res.log_likelihood, state.t, aux, ok)
+
+    def columns(self, state: TrackState) -> dict[str, NDArray[Any]]:
+        cols = common_columns(state.x, state.P, self.d)
+        cols["p_cv"] = state.aux["mu"][:, 0]
+        cols["p_ct"] = state.aux["mu"][:, 1]
+        cols["turn_rate_dps"] = np.degrees(state.aux["X"][:, 1, self._w])
+        return cols
+
+
+class FilterIMM:
+    """An IMM whose models are any filters honouring the contract.
+
+    Mixing is by component name (:attr:`RecursiveFilter.state_names`, model-own
+    augmentation for components a model lacks, as :class:`IMM`); each model's own ``aux``
+    (e.g. a heading filter) follows the model, unmixed; the model likelihoods are the
+    ``log_likelihood`` of each model's :meth:`update`. A plot rejected by any model is
+    rejected by the IMM (the track keeps its prediction). ``TrackState.aux`` holds the model
+    states ``m0, m1, ...`` (nested TrackStates) and the model probabilities ``mu (B, M)``.
+
+    Parameters
+    ----------
+    models : filters built for the same plots (same ``d``).
+    transition : (M, M), ``[i, j] = P(model j at k | model i at k-1)``.
+    mu0 : (M,) initial model probabilities (default uniform).
+    names : model names for the ``p_<name>`` columns (default ``m0, m1, ...``).
+    """
+
+    def __init__(
+        self,
+        models: Sequence[Any],
+        transition: ArrayLike,
+        mu0: ArrayLike | None = None,
+        names: Sequence[str] | None = None,
+    ) -> None:
+        self.models = list(models)
+        M = len(self.models)
+        self.d = self.models[0].d
+        self.range_rate = self.models[0].range_rate
+        self.transition = np.asarray(transition, dtype=float)
+        check_transition(self.transition, M)
+        names_j = [tuple(m.state_names) for m in self.models]
+        union: list[str] = []
+        for n in names_j:
+            union += [c for c in n if c not in union]
+        self.index = [np.array([union.index(c) for c in n], dtype=np.intp) for n in names_j]
+        self.valid = np.zeros((M, len(union)))
+        for j, ix in enumerate(self.index):
+            self.valid[j, ix] = 1.0
+        common = [c for c in names_j[0] if all(c in n for n in names_j)]
+        self._names = tuple(common)
+        self._out = np.array([union.index(c) for c in common], dtype=float)
+        self.mu0 = np.full(M, 1.0 / M) if mu0 is None else np.asarray(mu0, dtype=float)
+        self.names = tuple(names) if names is not None else tuple(f"m{j}" for j in range(M))
+        self.sensor = getattr(self.models[0], "sensor", None)
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return self._names
+
+    def _stack(self, states: Sequence[TrackState]) -> tuple[FloatArray, FloatArray]:
+        B = len(states[0])
+        n = self.valid.shape[1]
+        X = np.zeros((B, len(states), n))
+        P = np.zeros((B, len(states), n, n))
+        for j, (s, ix) in enumerate(zip(states, self.index, strict=True)):
+            X[:, j, ix] = s.x
+            P[:, j, ix[:, None], ix[None, :]] = s.P
+        return X, P
+
+    def _models(self, state: TrackState) -> list[TrackState]:
+        return [state.aux[f"m{j}"] for j in range(len(self.models))]
+
+    def _combine(
+        self, states: Sequence[TrackState], c: FloatArray, ll: FloatArray
+    ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        X, P = self._stack(states)
+        return combine(X, P, c, ll, self._out)  # type: ignore[no-any-return]
+
+    def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
+        states = [m.initiate(t, x, P) for m in self.models]
+        B = len(states[0])
+        mu = np.broadcast_to(self.mu0, (B, len(self.models))).copy()
+        _, xc, Pc, _ = self._combine(states, mu, np.zeros_like(mu))
+        aux: dict[str, Any] = {f"m{j}": s for j, s in enumerate(states)} | {"mu": mu}
+        return TrackState.new(states[0].t, xc, Pc, aux)
+
+    def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
+        tt, _ = step_times(state, t)
+        states = self._models(state)
+        X, P = self._stack(states)
+        X0, P0, c = _mix_kernel(X, P, state.aux["mu"], self.transition, self.valid)
+        out = []
+        for j, (m, s, ix) in enumerate(zip(self.models, states, self.index, strict=True)):
+            mixed = s.replace(x=X0[:, j, ix], P=P0[:, j, ix[:, None], ix[None, :]])
+            out.append(m.predict(mixed, tt))
+        _, xc, Pc, _ = self._combine(out, c, np.zeros_like(c))
+        aux: dict[str, Any] = {f"m{j}": s for j, s in enumerate(out)} | {"mu": c}
+        return predicted(state, tt, xc, Pc, aux)
+
+    def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
+        """Moment-matched mixture of the models' innovations (weights: ``mu``)."""
+        mu = state.aux["mu"]
+        parts = [
+            m.innovation(s, plots) for m, s in zip(self.models, self._models(state), strict=True)
+        ]
+        y = sum(mu[:, j, None] * p[0] for j, p in enumerate(parts))
+        S = sum(
+            mu[:, j, None, None] * (p[1] + (p[0] - y)[:, :, None] * (p[0] - y)[:, None, :])
+            for j, p in enumerate(parts)
+        )
+        return np.asarray(y), np.asarray(S)
+
+    def update(self, state: TrackState, plots: Plots) -> TrackState:
+        y, S = self.innovation(state, plots)
+        states = [m.update(s, plots) for m, s in zip(self.models, self._models(state), strict=True)]
+        ll = np.stack([s.log_likelihood for s in states], -1)
+        ok = np.isfinite(ll).all(-1)
+        ll = np.where(ok[:, None], ll, 0.0)
+        mu, xc, Pc, tot = self._combine(states, state.aux["mu"], ll)
+        aux: dict[str, Any] = {f"m{j}": s for j, s in enumerate(states)} | {"mu": mu}
+        return finish_update(state, xc, Pc, kalman.mahalanobis(y, S), tot, state.t, aux, ok)
+
+    def columns(self, state: TrackState) -> dict[str, NDArray[Any]]:
+        cols = common_columns(state.x, state.P, self.d)
+        for j, name in enumerate(self.names):
+            cols[f"p_{name}"] = state.aux["mu"][:, j]
+        return cols

@@ -8,7 +8,8 @@ probabilities from the converted position *and* the measured range rate (the nov
 over Gholson & Moose 1977); the state uses one common gain, and the covariances include
 the spread of the model means ("integrated" covariances).
 
-Processing at scan k follows the spec's steps 1-11 exactly (see :func:`_step_core`):
+Processing at scan k follows the spec's steps 1-11 exactly (compiled in
+:mod:`seatrack.filters.multimodel_kernel`):
 
 1. ``x^a(-) = Phi x(+) + Gamma' alpha_a``; ``Pbar = Phi P(+) Phi^T + Gamma Q Gamma^T``.
 2. ``S = H Pbar H^T + R``; ``f_a = N(Z; H x^a(-), S)``.
@@ -53,16 +54,29 @@ runs go through the same compiled kernel (``numba.guvectorize``).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
-from numba import guvectorize, njit
 from numpy.typing import ArrayLike, NDArray
 
+from seatrack.config import param
+from seatrack.filters.base import (
+    Plots,
+    SensorNoise,
+    TrackState,
+    cartesian_names,
+    common_columns,
+    conversion_param,
+    converted_positions,
+    finish_update,
+    predicted,
+    speed_sigma_param,
+    step_times,
+)
+from seatrack.filters.multimodel_kernel import step_kernel
 from seatrack.geometry import G0
-from seatrack.kalman import cholesky_core, forward_core, update_core
 
 FloatArray = NDArray[np.float64]
 
@@ -75,12 +89,11 @@ __all__ = [
     "MultiModelResult",
     "MultiModelFilter",
     "range_rate_row",
-    "track_plots_rangerate",
-    "track_plots_position",
-    "track_plots_imm",
+    "MultiModel",
+    "MultiModelRangeRate",
+    "MultiModelTrackConfig",
+    "MultiModelRangeRateConfig",
 ]
-
-_LOG_2PI = math.log(2.0 * math.pi)
 
 #: the embodiment's five constant vectors (m/s^2, East North Up): 10 g North, East, South,
 #: West and zero acceleration
@@ -282,259 +295,6 @@ class MultiModelResult:
     names: tuple[str, ...]
 
 
-# ---------------------------------------------------------------------------
-# Compiled scan (steps 1-11 for one track)
-# ---------------------------------------------------------------------------
-@njit(cache=True)
-def _maha(L, y):  # pragma: no cover - compiled
-    """``y^T (L L^T)^-1 y`` by forward substitution."""
-    w = np.empty(y.shape[0])
-    forward_core(L, y, w)
-    acc = 0.0
-    for i in range(y.shape[0]):
-        acc += w[i] * w[i]
-    return acc
-
-
-@njit(cache=True)
-def _step_core(
-    x, P, beta, T, Z, R, rho, srr2, spos, svel, alphas, pi, Q, use_rr, integ, xo, Po, bo, xp, Pp
-):  # pragma: no cover - compiled
-    """One scan of the spec's processing order; returns ``(log_likelihood, nis)``."""
-    n = x.shape[0]
-    d = n // 2
-    N = alphas.shape[0]
-    T2 = 0.5 * T * T
-    gam = np.empty(n)  # Gamma = Gamma' = [T^2/2 I; T I] (diagonal blocks)
-    for i in range(d):
-        gam[i] = T2
-        gam[i + d] = T
-    # --- step 1: common part Phi x and Pbar = Phi P Phi^T + Gamma Q Gamma^T
-    xc = np.empty(n)
-    for i in range(d):
-        xc[i] = x[i] + T * x[i + d]
-        xc[i + d] = x[i + d]
-    FP = np.empty((n, n))
-    for j in range(n):
-        for i in range(d):
-            FP[i, j] = P[i, j] + T * P[i + d, j]
-            FP[i + d, j] = P[i + d, j]
-    Pb = np.empty((n, n))
-    for i in range(n):
-        for j in range(d):
-            Pb[i, j] = FP[i, j] + T * FP[i, j + d]
-            Pb[i, j + d] = FP[i, j + d]
-    for i in range(n):
-        for j in range(n):
-            Pb[i, j] += gam[i] * gam[j] * Q[i % d, j % d]
-    for i in range(n):
-        for j in range(i + 1, n):
-            v = 0.5 * (Pb[i, j] + Pb[j, i])
-            Pb[i, j] = v
-            Pb[j, i] = v
-    # --- step 4 (prior part) and steps 10-11 of the previous scan: beta^- = pi beta = mu
-    bm = np.empty(N)
-    for a in range(N):
-        s = 0.0
-        for b in range(N):
-            s += pi[a, b] * beta[b]
-        bm[a] = s
-    um = np.zeros(d)
-    for a in range(N):
-        for i in range(d):
-            um[i] += bm[a] * alphas[a, i]
-    Cm = np.zeros((d, d))
-    for a in range(N):
-        for i in range(d):
-            for j in range(d):
-                Cm[i, j] += bm[a] * (alphas[a, i] - um[i]) * (alphas[a, j] - um[j])
-    for i in range(n):
-        xp[i] = xc[i] + gam[i] * um[i % d]
-        for j in range(n):
-            Pp[i, j] = Pb[i, j] + integ * gam[i] * gam[j] * Cm[i % d, j % d]
-    # --- no plot: pure prediction
-    have_z = True
-    for i in range(d):
-        if not math.isfinite(Z[i]):
-            have_z = False
-    if not have_z:
-        for a in range(N):
-            bo[a] = bm[a]
-        for i in range(n):
-            xo[i] = xp[i]
-            for j in range(n):
-                Po[i, j] = Pp[i, j]
-        return np.nan, np.nan
-    # --- step 2: S = H Pbar H^T + R and the position log-likelihoods
-    S = np.empty((d, d))
-    for i in range(d):
-        for j in range(d):
-            S[i, j] = Pb[i, j] + 0.5 * (R[i, j] + R[j, i])
-    L = np.empty((d, d))
-    logdet = cholesky_core(S, L)
-    if not math.isfinite(logdet):
-        for i in range(n):
-            xo[i] = np.nan
-        return np.nan, np.nan
-    lw = np.empty(N)
-    y = np.empty(d)
-    for a in range(N):
-        for i in range(d):
-            y[i] = Z[i] - xc[i] - T2 * alphas[a, i]
-        lw[a] = -0.5 * (_maha(L, y) + logdet + d * _LOG_2PI)
-    # --- step 3: range-rate log-likelihoods, h^a evaluated at x^a(-) relative to the sensor
-    if use_rr != 0.0 and math.isfinite(rho):
-        h = np.empty(n)
-        c = np.empty(d)
-        wc = np.empty(d)
-        wy = np.empty(d)
-        for a in range(N):
-            Rh2 = 0.0
-            pv = 0.0
-            for i in range(d):
-                p_i = xc[i] + T2 * alphas[a, i] - spos[i]
-                v_i = xc[i + d] + T * alphas[a, i] - svel[i]
-                Rh2 += p_i * p_i
-                pv += p_i * v_i
-            Rh = math.sqrt(Rh2)
-            rhohat = pv / Rh
-            for i in range(d):
-                p_i = xc[i] + T2 * alphas[a, i] - spos[i]
-                v_i = xc[i + d] + T * alphas[a, i] - svel[i]
-                h[i] = (v_i - rhohat * p_i / Rh) / Rh
-                h[i + d] = p_i / Rh
-            s = srr2
-            for i in range(n):
-                hi = 0.0
-                for j in range(n):
-                    hi += Pb[i, j] * h[j]
-                s += h[i] * hi
-                if i < d:
-                    c[i] = hi  # (H Pbar h^T)_i
-            e = rho - rhohat
-            if use_rr == 2.0:  # joint: condition the range rate on the position innovation
-                for i in range(d):
-                    y[i] = Z[i] - xc[i] - T2 * alphas[a, i]
-                forward_core(L, c, wc)
-                forward_core(L, y, wy)
-                for i in range(d):
-                    e -= wc[i] * wy[i]
-                    s -= wc[i] * wc[i]
-            lw[a] += -0.5 * (e * e / s + math.log(2.0 * math.pi * s))
-    # --- step 4: reliabilities in log space (log-sum-exp)
-    for a in range(N):
-        lw[a] += math.log(bm[a]) if bm[a] > 0.0 else -np.inf
-    mx = -np.inf
-    for a in range(N):
-        if lw[a] > mx:
-            mx = lw[a]
-    if mx > -np.inf and math.isfinite(mx):
-        s = 0.0
-        for a in range(N):
-            s += math.exp(lw[a] - mx)
-        lse = mx + math.log(s)
-        for a in range(N):
-            bo[a] = math.exp(lw[a] - lse)
-    else:  # every likelihood is exactly zero even in log space: no information
-        lse = -np.inf
-        for a in range(N):
-            bo[a] = bm[a]
-    # --- steps 5 and 7: common gain and P^a(+) (Joseph form, seatrack.kalman core)
-    H = np.zeros((d, n))
-    for i in range(d):
-        H[i, i] = 1.0
-    yc = np.empty(d)
-    for i in range(d):
-        yc[i] = Z[i] - xc[i]
-    So = np.empty((d, d))
-    K = np.empty((n, d))
-    update_core(xc, Pb, yc, H, R, xo, Po, So, K)  # xo = Phi x + K (Z - H Phi x)
-    # --- step 6: x(+) = x~ + K (Z - H x~) = [Phi x + K (Z - H Phi x)] + (I - KH) Gamma' u
-    u = np.zeros(d)
-    for a in range(N):
-        for i in range(d):
-            u[i] += bo[a] * alphas[a, i]
-    G = np.empty((n, d))  # (I - KH) Gamma'
-    for i in range(n):
-        for j in range(d):
-            G[i, j] = (gam[i] if i % d == j else 0.0) - K[i, j] * T2
-    for i in range(n):
-        s = 0.0
-        for j in range(d):
-            s += G[i, j] * u[j]
-        xo[i] += s
-    # --- step 8: integrated covariance (spread of the model means)
-    if integ != 0.0:
-        C = np.zeros((d, d))
-        for a in range(N):
-            for i in range(d):
-                for j in range(d):
-                    C[i, j] += bo[a] * (alphas[a, i] - u[i]) * (alphas[a, j] - u[j])
-        GC = np.empty((n, d))
-        for i in range(n):
-            for j in range(d):
-                s = 0.0
-                for k in range(d):
-                    s += G[i, k] * C[k, j]
-                GC[i, j] = s
-        for i in range(n):
-            for j in range(i, n):
-                s = 0.0
-                for k in range(d):
-                    s += GC[i, k] * G[j, k]
-                v = Po[i, j] + s
-                Po[i, j] = v
-                Po[j, i] = v
-    # --- consistency statistic: plot against the integrated prediction
-    for i in range(d):
-        y[i] = Z[i] - xp[i]
-        for j in range(d):
-            S[i, j] = Pp[i, j] + 0.5 * (R[i, j] + R[j, i])
-    nis = _maha(L, y) if math.isfinite(cholesky_core(S, L)) else np.nan
-    return lse, nis
-
-
-@guvectorize(
-    [
-        "void(f8[:], f8[:,:], f8[:], f8, f8[:], f8[:,:], f8, f8, f8[:], f8[:], f8[:,:], f8[:,:],"
-        " f8[:,:], f8, f8, f8[:], f8[:,:], f8[:], f8[:], f8[:,:], f8[:], f8[:])"
-    ],
-    "(n),(n,n),(N),(),(d),(d,d),(),(),(d),(d),(N,d),(N,N),(d,d),(),()"
-    "->(n),(n,n),(N),(n),(n,n),(),()",
-    nopython=True,
-    cache=True,
-)
-def _step_kernel(
-    x,
-    P,
-    beta,
-    T,
-    Z,
-    R,
-    rho,
-    srr2,
-    spos,
-    svel,
-    alphas,
-    pi,
-    Q,
-    use_rr,
-    integ,
-    xo,
-    Po,
-    bo,
-    xp,
-    Pp,
-    ll,
-    nis,
-):  # pragma: no cover - compiled
-    a, b = _step_core(
-        x, P, beta, T, Z, R, rho, srr2, spos, svel, alphas, pi, Q, use_rr, integ, xo, Po, bo, xp, Pp
-    )
-    ll[0] = a
-    nis[0] = b
-
-
 def range_rate_row(
     x: ArrayLike, sensor: ArrayLike | None = None, sensor_vel: ArrayLike | None = None
 ) -> tuple[Any, FloatArray]:
@@ -590,7 +350,7 @@ class MultiModelFilter:
         self.pi = np.ascontiguousarray(self.config.transition_matrix())
         self.Q = self.config.process_noise(d)
         self.names = tuple(self.config.names)
-        self._flags = (
+        self.flags = (
             (2.0 if self.config.range_rate_likelihood == "joint" else 1.0)
             if self.config.use_range_rate
             else 0.0,
@@ -645,7 +405,7 @@ class MultiModelFilter:
         rho = np.nan if range_rate is None else range_rate
         sp = np.zeros(d) if sensor is None else _f(sensor)[..., :d]
         sv = np.zeros(d) if sensor_vel is None else _f(sensor_vel)[..., :d]
-        out = _step_kernel(
+        out = step_kernel(
             state.x,
             state.P,
             state.beta,
@@ -659,8 +419,8 @@ class MultiModelFilter:
             self.alphas,
             self.pi,
             self.Q,
-            self._flags[0],
-            self._flags[1],
+            self.flags[0],
+            self.flags[1],
         )
         return MultiModelStep(*out)
 
@@ -731,211 +491,142 @@ class MultiModelFilter:
 
 
 # ---------------------------------------------------------------------------
-# `seatrack track --method mm-rangerate | mm`
+# The filter contract: `seatrack track --method mm | mm-rangerate`
 # ---------------------------------------------------------------------------
-#: config keys of the plot runners and their defaults (SI except where the name says deg / g)
-RUNNER_DEFAULTS: dict[str, Any] = {
-    "sigma_range_m": 30.0,
-    "sigma_azimuth_deg": 0.3,
-    "sigma_elevation_deg": 0.3,
-    "sigma_range_rate_mps": 1.0,
-    "sigma_accel_mps2": 10.0,
-    "accel_g": 10.0,
-    "p_stay": 0.9,
-    "conversion": "unbiased",
-    "initial_velocity_std_mps": 300.0,
-    "integrated_covariance": True,
-}
+@dataclass(frozen=True)
+class MultiModelTrackConfig:
+    """Parameters of ``--method mm`` (position-only reliabilities, the prior art).
+
+    The hypotheses are the embodiment's five: ``accel`` North, East, South, West and zero.
+    """
+
+    sigma_accel: float = param(
+        3.0, key="sigma_accel_mps2", unit="m/s^2", doc="white acceleration std per axis", min=0
+    )
+    accel: float = param(
+        10.0, key="accel_g", unit="g", doc="magnitude of the N/E/S/W hypotheses", min=0
+    )
+    p_stay: float = param(0.9, doc="diagonal of the hypothesis transition matrix", min=0, max=1)
+    conversion: str = conversion_param()
+    initial_speed_sigma: float = speed_sigma_param(300.0, aliases=("initial_velocity_std_mps",))
+    integrated_covariance: bool = param(True, doc="spread-of-means terms (steps 8 and 11)")
+    range_rate_likelihood: str = param(
+        "independent",
+        choices=("independent", "joint"),
+        doc="range-rate likelihood: the spec's product, or the exact joint (mm-rangerate)",
+    )
 
 
-#: ``mm`` (position-only reliabilities) defaults: as :data:`RUNNER_DEFAULTS` except the
-#: white acceleration, for which the benchmark's tuning picks 1-3 m/s^2 (vs 10 with range rate)
-MM_DEFAULTS: dict[str, Any] = {**RUNNER_DEFAULTS, "sigma_accel_mps2": 3.0}
+@dataclass(frozen=True)
+class MultiModelRangeRateConfig(MultiModelTrackConfig):
+    """Parameters of ``--method mm-rangerate`` (reliabilities from position and range rate)."""
+
+    sigma_accel: float = param(
+        10.0, key="sigma_accel_mps2", unit="m/s^2", doc="white acceleration std per axis", min=0
+    )
 
 
-def runner_config(
-    config: Mapping[str, Any], defaults: Mapping[str, Any] = RUNNER_DEFAULTS
-) -> dict[str, Any]:
-    """Merge a user config with the defaults; unknown keys are an error (likely typos)."""
-    unknown = sorted(set(config) - set(defaults))
-    if unknown:
-        raise ValueError(
-            f"unknown config key(s) {', '.join(unknown)}; known: {', '.join(sorted(defaults))}"
+class MultiModel:
+    """The multiple-model filter on the filter contract (``--method mm``).
+
+    ``TrackState.x``/``P`` hold the integrated estimate: after :meth:`predict` the
+    integrated prediction ``x(-)``, ``P(-)`` (steps 10-11), after :meth:`update` the
+    filtered ``x(+)``, ``P(+)``. ``aux`` carries what the next scan starts from:
+    ``x_post``, ``P_post``, ``t_post`` (the last filtered estimate and its time) and the
+    reliabilities ``beta (B, N)``. Plots are converted to Cartesian positions
+    (:func:`seatrack.filters.converted.convert_plots`) with the sensor noise. Every step is
+    one call of the compiled scan kernel over the whole batch.
+    """
+
+    Config: type = MultiModelTrackConfig
+    dims: ClassVar[tuple[int, ...]] = (2, 3)
+    use_range_rate: ClassVar[bool] = False
+
+    def __init__(
+        self,
+        config: MultiModelTrackConfig | None = None,
+        sensor: SensorNoise | None = None,
+        d: int = 2,
+        range_rate: bool = False,
+    ) -> None:
+        self.config = config or self.Config()
+        self.sensor = sensor or SensorNoise()
+        self.d = d
+        self.range_rate = bool(range_rate and self.use_range_rate)
+        c = self.config
+        alphas = tuple(tuple(a) for a in np.asarray(DEFAULT_ALPHAS) / (10 * G0) * c.accel)
+        self.mm = MultiModelFilter(
+            MultiModelConfig(
+                alphas=alphas,
+                p_stay=c.p_stay,
+                sigma_w=c.sigma_accel,
+                sigma_range_rate=self.sensor.sigma_range_rate,
+                use_range_rate=self.range_rate,
+                integrated_covariance=c.integrated_covariance,
+                range_rate_likelihood=c.range_rate_likelihood,
+            ),
+            d=d,
         )
-    return {**defaults, **config}
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return cartesian_names(self.d)
+
+    def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
+        xx = np.asarray(x, dtype=float)
+        PP = np.asarray(P, dtype=float)
+        beta = np.broadcast_to(self.mm.config.prior_vector(), (xx.shape[0], len(self.mm.names)))
+        st = TrackState.new(t, xx, PP)
+        return st.replace(aux={"x_post": xx, "P_post": PP, "t_post": st.t, "beta": beta.copy()})
+
+    def _scan(self, state: TrackState, z: FloatArray, R: FloatArray, rho: Any, plots: Any) -> Any:
+        d = self.d
+        a = state.aux
+        sp = np.zeros(d) if plots is None else plots.sensor[:, :d]
+        sv = np.zeros(d) if plots is None else plots.sensor_vel[:, :d]
+        return step_kernel(
+            a["x_post"], a["P_post"], a["beta"], state.t - a["t_post"], z, R, rho,
+            self.mm.config.sigma_range_rate**2, sp, sv, self.mm.alphas, self.mm.pi, self.mm.Q,
+            self.mm.flags[0], self.mm.flags[1],
+        )  # fmt: skip
+
+    def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
+        tt, _ = step_times(state, t)
+        s = state.replace(t=tt)
+        nan = np.full(self.d, np.nan)
+        out = self._scan(s, nan, np.eye(self.d), np.nan, None)  # no plot: pure prediction
+        return predicted(state, tt, out[3], out[4])
+
+    def convert(self, plots: Plots) -> tuple[FloatArray, FloatArray]:
+        """Converted positions ``(B, d)`` and covariances ``(B, d, d)`` of the plots."""
+        return converted_positions(plots, self.sensor, self.config.conversion)
+
+    def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
+        z, R = self.convert(plots)
+        d = self.d
+        return z - state.x[:, :d], state.P[:, :d, :d] + R
+
+    def update(self, state: TrackState, plots: Plots) -> TrackState:
+        z, R = self.convert(plots)
+        ok = np.asarray(np.isfinite(z).all(-1) & np.isfinite(R).all((-1, -2)), dtype=bool)
+        z = np.where(ok[:, None], z, np.nan)
+        R = np.where(ok[:, None, None], R, np.eye(self.d))
+        rho = plots.range_rate if self.range_rate and plots.range_rate is not None else np.nan
+        with np.errstate(all="ignore"):
+            xo, Po, bo, _, _, ll, nis = self._scan(state, z, R, rho, plots)
+        aux = {"x_post": xo, "P_post": Po, "t_post": state.t, "beta": bo}
+        return finish_update(state, xo, Po, nis, ll, state.t, aux, ok)
+
+    def columns(self, state: TrackState) -> dict[str, NDArray[Any]]:
+        cols = common_columns(state.x, state.P, self.d)
+        for a, name in enumerate(self.mm.names):
+            cols[f"p_{name}"] = state.aux["beta"][:, a]
+        return cols
 
 
-def converted_plots(plots: Any, cfg: Mapping[str, Any]) -> tuple[FloatArray, FloatArray, int]:
-    """Converted positions ``(K, d)`` and covariances ``(K, d, d)`` of a PlotTrack."""
-    from seatrack.filters.converted import convert_plots
+class MultiModelRangeRate(MultiModel):
+    """``--method mm-rangerate``: reliabilities from position and range rate (the patent)."""
 
-    el = plots.elevation
-    cm = convert_plots(
-        plots.range,
-        plots.azimuth,
-        el,
-        float(cfg["sigma_range_m"]),
-        math.radians(float(cfg["sigma_azimuth_deg"])),
-        None if el is None else math.radians(float(cfg["sigma_elevation_deg"])),
-        sensor=plots.sensor,
-        method=cfg["conversion"],
-    )
-    return cm.z, cm.R, 2 if el is None else 3
-
-
-def _track(plots: Any, config: Mapping[str, Any], use_range_rate: bool) -> dict[str, FloatArray]:
-    from seatrack.filters.ekf import output_columns
-
-    cfg = runner_config(config, RUNNER_DEFAULTS if use_range_rate else MM_DEFAULTS)
-    z, R, d = converted_plots(plots, cfg)
-    g = float(cfg["accel_g"]) * G0
-    alphas = tuple(tuple(a) for a in np.asarray(DEFAULT_ALPHAS) / (10 * G0) * g)
-    mcfg = MultiModelConfig(
-        alphas=alphas,
-        p_stay=float(cfg["p_stay"]),
-        sigma_w=float(cfg["sigma_accel_mps2"]),
-        sigma_range_rate=float(cfg["sigma_range_rate_mps"]),
-        use_range_rate=use_range_rate,
-        integrated_covariance=bool(cfg["integrated_covariance"]),
-    )
-    rr = plots.range_rate if use_range_rate else None
-    if use_range_rate and rr is None:
-        raise ValueError(f"track {plots.track}: method mm-rangerate needs a range_rate_mps column")
-    flt = MultiModelFilter(mcfg, d=d)
-    res = flt.run(
-        plots.t,
-        z,
-        R,
-        rr,
-        plots.sensor[:, :d],
-        plots.sensor_vel[:, :d],
-        velocity_std=float(cfg["initial_velocity_std_mps"]),
-    )
-    out = output_columns(res.x, res.P, d)
-    for a, name in enumerate(flt.names):
-        out[f"p_{name}"] = res.beta[:, a]
-    return out
-
-
-def track_plots_rangerate(plots: Any, config: Mapping[str, Any]) -> dict[str, FloatArray]:
-    """``seatrack track --method mm-rangerate``: reliabilities from position and range rate.
-
-    Config keys (defaults in :data:`RUNNER_DEFAULTS`): polar noise ``sigma_range_m``,
-    ``sigma_azimuth_deg``, ``sigma_elevation_deg``, ``sigma_range_rate_mps``; white
-    acceleration ``sigma_accel_mps2``; hypothesis magnitude ``accel_g`` (N/E/S/W and zero);
-    ``p_stay``; ``conversion`` (``unbiased`` / ``linearized``);
-    ``initial_velocity_std_mps``; ``integrated_covariance``. Output: the common columns
-    plus ``p_<model>`` reliabilities.
-    """
-    return _track(plots, config, use_range_rate=True)
-
-
-def track_plots_position(plots: Any, config: Mapping[str, Any]) -> dict[str, FloatArray]:
-    """``seatrack track --method mm``: the same filter with position-only reliabilities.
-
-    Config keys as :func:`track_plots_rangerate` (defaults :data:`MM_DEFAULTS`); a
-    ``range_rate_mps`` column, if present, is ignored.
-    """
-    return _track(plots, config, use_range_rate=False)
-
-
-#: config keys of the IMM runner (CV + coordinated turn on converted plots); the noise
-#: defaults are those chosen on the tuning seeds of ``benchmarks/multimodel.py`` (2 s scans)
-IMM_DEFAULTS: dict[str, Any] = {
-    "sigma_range_m": 30.0,
-    "sigma_azimuth_deg": 0.3,
-    "sigma_elevation_deg": 0.3,
-    "sigma_range_rate_mps": 1.0,
-    "q_cv": 0.01,
-    "q_ct": 100.0,
-    "q_omega": 1e-3,
-    "p_stay": 0.95,
-    "conversion": "unbiased",
-    "initial_velocity_std_mps": 300.0,
-    "initial_turn_rate_std_dps": 5.0,
-    "use_range_rate": False,
-}
-
-
-def imm_filter(cfg: Mapping[str, Any], d: int) -> Any:
-    """The reference IMM: CV + coordinated turn (:class:`seatrack.filters.imm.IMM`).
-
-    Measurements are the converted positions (linear update), or, with
-    ``use_range_rate``, positions stacked with the range rate (extended update; the
-    sensor state ``[position, velocity]`` is passed to the range-rate model).
-    """
-    from seatrack.filters.imm import IMM
-    from seatrack.models.measurement import Position, RangeRate, Stacked
-    from seatrack.models.motion import ConstantVelocity, CoordinatedTurn
-
-    models: list[Any] = [
-        ConstantVelocity(q=float(cfg["q_cv"]), d=d),
-        CoordinatedTurn(q=float(cfg["q_ct"]), q_omega=float(cfg["q_omega"]), d=d),
-    ]
-    meas: list[Any] = []
-    for m in models:
-        n = m.ndim_state
-        pos = tuple(range(d))
-        if cfg["use_range_rate"]:
-            meas.append(
-                Stacked(
-                    [Position(n=n, pos=pos), RangeRate(n=n, pos=pos, vel=tuple(range(d, 2 * d)))]
-                )
-            )
-        else:
-            meas.append(Position(n=n, pos=pos))
-    p = float(cfg["p_stay"])
-    return IMM(models, [[p, 1 - p], [1 - p, p]], meas)
-
-
-def track_plots_imm(plots: Any, config: Mapping[str, Any]) -> dict[str, FloatArray]:
-    """``seatrack track --method imm``: standard IMM (CV + coordinated turn) on converted plots.
-
-    Config keys (defaults :data:`IMM_DEFAULTS`): polar noise as for ``mm``; ``q_cv``,
-    ``q_ct`` (white-noise acceleration PSD, m^2/s^3), ``q_omega`` (turn-rate PSD,
-    rad^2/s^3), ``p_stay`` (IMM transition diagonal), ``conversion``,
-    ``initial_velocity_std_mps``, ``initial_turn_rate_std_dps``, ``use_range_rate``.
-    Output: the common columns plus ``p_cv``, ``p_ct`` and ``turn_rate_dps`` (CT model).
-    """
-    from seatrack.filters.ekf import output_columns
-
-    cfg = runner_config(config, IMM_DEFAULTS)
-    z, R, d = converted_plots(plots, cfg)
-    use_rr = bool(cfg["use_range_rate"])
-    if use_rr and plots.range_rate is None:
-        raise ValueError(f"track {plots.track}: use_range_rate needs a range_rate_mps column")
-    imm = imm_filter(cfg, d)
-    K = z.shape[0]
-    x0 = np.zeros(2 * d)
-    x0[:d] = z[0]
-    P0 = np.zeros((2 * d, 2 * d))
-    P0[:d, :d] = R[0]
-    P0[d:, d:] = np.eye(d) * float(cfg["initial_velocity_std_mps"]) ** 2
-    sw = math.radians(float(cfg["initial_turn_rate_std_dps"]))
-    st = imm.initial_state(x0, P0, extra={"w": (0.0, sw**2)})
-    xs = np.empty((K, 2 * d))
-    Ps = np.empty((K, 2 * d, 2 * d))
-    mus = np.empty((K, 2))
-    w = np.empty(K)
-    xs[0], Ps[0], mus[0], w[0] = x0, P0, st.mu, 0.0
-    srr2 = float(cfg["sigma_range_rate_mps"]) ** 2
-    for k in range(1, K):
-        dt = float(plots.t[k] - plots.t[k - 1])
-        if use_rr:
-            # Position.h subtracts the sensor position given with the range-rate sensor state
-            zk = np.append(z[k] - plots.sensor[k, :d], plots.range_rate[k])
-            Rk = np.zeros((d + 1, d + 1))
-            Rk[:d, :d] = R[k]
-            Rk[d, d] = srr2
-            sensor = np.concatenate([plots.sensor[k, :d], plots.sensor_vel[k, :d]])
-            res = imm.step(st, zk, dt, Rk, sensor)
-        else:
-            res = imm.step(st, z[k], dt, R[k])
-        st = res.state
-        xs[k], Ps[k], mus[k] = res.x, res.P, st.mu
-        w[k] = imm.model_state(st, 1)[0][-1]
-    out = output_columns(xs, Ps, d)
-    out["p_cv"] = mus[:, 0]
-    out["p_ct"] = mus[:, 1]
-    out["turn_rate_dps"] = np.degrees(w)
-    return out
+    Config: type = MultiModelRangeRateConfig
+    use_range_rate: ClassVar[bool] = True
+    needs_range_rate: ClassVar[bool] = True

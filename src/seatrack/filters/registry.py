@@ -1,99 +1,222 @@
 """Registry of the filters ``seatrack track --method NAME`` can run.
 
-Each method is a function ``run(plots: PlotTrack, config: Mapping) -> dict[str, ndarray]``
-returning output columns with one value per plot (the common ones ``x_m``, ``y_m``,
-``z_m``, ``vx_mps``, ``vy_mps``, ``vz_mps``, ``std_x_m``, ``std_y_m``, ``std_z_m`` plus
-method-specific ones). Methods are imported lazily by module path so that ``--help`` stays
-fast and a method's dependencies load only when it runs.
+Every method is a class honouring :class:`seatrack.filters.base.RecursiveFilter` with
 
-Every method accepts the measurement-noise keys of :data:`COMMON_CONFIG_KEYS` in its
-configuration (ignoring those it has no use for), so one configuration describing the
-sensor drives any method; method-specific keys are documented by each runner.
+* ``Config`` -- its frozen parameter dataclass (fields declared with
+  :func:`seatrack.config.param`; each has ``initial_speed_sigma``, the velocity standard
+  deviation of a new track);
+* ``dims`` -- the plot dimensions it tracks in (``(2,)``: 3-D plots are tracked in the
+  horizontal plane, :meth:`Plots.horizontal`);
+* ``needs_range_rate`` (optional, default false);
+* a constructor ``(config, sensor, d, range_rate)``.
+
+:func:`build` turns a configuration table (a parsed TOML file: flat method keys plus the
+sensor keys, flat or in a ``[sensor]`` table) into a ready :class:`Method`, :func:`run` runs
+one over every labelled track of a set of plots, all tracks as one batch per step
+(:func:`seatrack.filters.base.run_tracks`). Methods are imported lazily by module path so
+that ``--help`` stays fast.
+
+The sensor section (:class:`~seatrack.filters.base.SensorNoise`) is shared by every
+method with one documented default; a method that has no use for a sensor key (e.g. range
+rate in a method that ignores it) accepts and ignores it, so one configuration describing
+the sensor drives any method.
 """
 
 from __future__ import annotations
 
 import importlib
 from collections.abc import Callable, Mapping
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
-#: method name -> (module, function, one-line description)
+from seatrack.config import ConfigError, config_keys, parse_config
+from seatrack.filters.base import (
+    COMMON_COLUMNS,
+    Plots,
+    RecursiveFilter,
+    SensorNoise,
+    plot_gaussian,
+    run_tracks,
+)
+
+__all__ = [
+    "METHODS",
+    "COMMON_COLUMNS",
+    "SENSOR_KEYS",
+    "Method",
+    "method_class",
+    "split_config",
+    "build",
+    "run",
+    "track_index",
+    "describe_method",
+]
+
+#: method name -> (module, class, one-line description)
 METHODS: dict[str, tuple[str, str, str]] = {
-    "ekf": ("seatrack.filters.ekf", "track_plots", "constant-velocity EKF on polar plots"),
+    "ekf": ("seatrack.filters.ekf", "EKF", "constant-velocity EKF on polar plots"),
     "robust": (
-        "seatrack.filters.robust",
-        "track_plots_robust",
+        "seatrack.filters.robust_track",
+        "Robust",
         "Ramazanov robust beam-frame filter (algorithm R), 2-D range/bearing",
     ),
     "robust-adaptive": (
-        "seatrack.filters.robust",
-        "track_plots_robust_adaptive",
+        "seatrack.filters.robust_track",
+        "RobustAdaptive",
         "Ramazanov adaptive-robust beam-frame filter (algorithm A), 2-D range/bearing",
     ),
     "huber": (
-        "seatrack.filters.robust_baselines",
-        "track_plots_huber",
+        "seatrack.filters.robust_track",
+        "Huber",
         "Huber M-estimation EKF (IRLS), 2-D range/bearing",
     ),
     "student-t": (
-        "seatrack.filters.robust_baselines",
-        "track_plots_student_t",
+        "seatrack.filters.robust_track",
+        "StudentT",
         "variational-Bayes Student-t EKF, 2-D range/bearing",
     ),
     "ekf-rb": (
-        "seatrack.filters.robust_baselines",
-        "track_plots_ekf",
+        "seatrack.filters.robust_track",
+        "RangeBearingEKF",
         "2-D range/bearing CV EKF with outlier diagnostics (baseline of robust)",
     ),
     "turning": (
         "seatrack.filters.turning",
-        "track_plots",
+        "Turning",
         "turning-target CV-EKF, Q raised by a fuzzy turn-rate vote (CN 104407337)",
     ),
     "mm-rangerate": (
         "seatrack.filters.multimodel",
-        "track_plots_rangerate",
+        "MultiModelRangeRate",
         "multiple-model filter, reliabilities from position and range rate (JP H06-95138)",
     ),
     "mm": (
         "seatrack.filters.multimodel",
-        "track_plots_position",
+        "MultiModel",
         "multiple-model filter, position-only reliabilities (Gholson & Moose prior art)",
     ),
     "imm": (
-        "seatrack.filters.multimodel",
-        "track_plots_imm",
+        "seatrack.filters.imm",
+        "CVCTIMM",
         "standard IMM, CV + coordinated turn",
     ),
 }
 
-#: configuration keys every method accepts (and uses where it has such a measurement):
-#: the measurement noise of the plots, in the units the names say
-COMMON_CONFIG_KEYS = (
-    "sigma_range_m",
-    "sigma_azimuth_deg",
-    "sigma_elevation_deg",
-    "sigma_range_rate_mps",
-)
-
-COMMON_COLUMNS = (
-    "x_m",
-    "y_m",
-    "z_m",
-    "vx_mps",
-    "vy_mps",
-    "vz_mps",
-    "std_x_m",
-    "std_y_m",
-    "std_z_m",
-)
+#: the sensor keys every method accepts (flat or in a ``[sensor]`` table)
+SENSOR_KEYS = tuple(k for k, name in config_keys(SensorNoise).items() if k != name)
 
 
-def get_method(name: str) -> Callable[[Any, Mapping[str, Any]], dict[str, np.ndarray]]:
-    """Return the runner of method ``name`` (raises ValueError listing the known ones)."""
+def method_class(name: str) -> Any:
+    """The class of method ``name`` (ValueError listing the known ones)."""
     if name not in METHODS:
         raise ValueError(f"unknown method {name!r}; choose one of {', '.join(sorted(METHODS))}")
-    module, func, _ = METHODS[name]
-    return getattr(importlib.import_module(module), func)  # type: ignore[no-any-return]
+    module, cls, _ = METHODS[name]
+    return getattr(importlib.import_module(module), cls)
+
+
+def split_config(
+    table: Mapping[str, Any] | None, source: str = "config"
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """Split a configuration table into ``(sensor keys, method keys)``.
+
+    Sensor keys may be flat or in a ``[sensor]`` table, not both for the same key.
+    """
+    tab = dict(table or {})
+    sensor = tab.pop("sensor", None)
+    if sensor is not None and not isinstance(sensor, Mapping):
+        raise ConfigError(f"{source}: sensor: expected a table, got {sensor!r}")
+    out = dict(sensor or {})
+    for key in SENSOR_KEYS:
+        if key in tab:
+            if key in out:
+                raise ConfigError(f"{source}: {key} is given both flat and in [sensor]")
+            out[key] = tab.pop(key)
+    return out, tab
+
+
+@dataclass(frozen=True)
+class Method:
+    """A configured method: its filter and its initiator (plots -> Cartesian ``x, P``)."""
+
+    name: str
+    filter: RecursiveFilter
+    initiate: Callable[[Plots], tuple[Any, Any]]
+    horizontal: bool  #: plots are reduced to the horizontal plane before use
+
+    def prepare(self, plots: Plots) -> Plots:
+        """The plots as the filter takes them (2-D methods: horizontal)."""
+        return plots.horizontal() if self.horizontal else plots
+
+
+def build(
+    name: str,
+    table: Mapping[str, Any] | None = None,
+    *,
+    d: int = 2,
+    range_rate: bool = False,
+    source: str = "config",
+) -> Method:
+    """Configure method ``name`` from a configuration table for ``d``-D plots.
+
+    Raises
+    ------
+    ConfigError
+        Unknown key (listing the valid method and sensor keys), wrong type, bad value.
+    ValueError
+        Unknown method, or the plots lack a column the method needs.
+    """
+    cls = method_class(name)
+    sensor_tab, method_tab = split_config(table, source)
+    try:
+        cfg = parse_config(cls.Config, method_tab, source=source)
+    except ConfigError as exc:
+        if "unknown key" in str(exc):
+            raise ConfigError(f"{exc}; sensor keys: {', '.join(SENSOR_KEYS)}") from None
+        raise
+    sensor = parse_config(SensorNoise, sensor_tab, source=source)
+    if getattr(cls, "needs_range_rate", False) and not range_rate:
+        raise ValueError(f"method {name} needs a range_rate_mps column in the plots")
+    dd = d if d in cls.dims else max(cls.dims)
+    flt = cls(cfg, sensor, dd, range_rate)
+    speed = float(cfg.initial_speed_sigma)
+    use_rr = bool(flt.range_rate)
+
+    def initiate(p: Plots) -> tuple[Any, Any]:
+        return plot_gaussian(p, sensor, speed, use_rr)
+
+    return Method(name, flt, initiate, dd != d)
+
+
+def track_index(labels: NDArray[Any]) -> tuple[NDArray[np.int64], list[str]]:
+    """Track number ``0..T-1`` of each plot (in order of first appearance) and the labels."""
+    names, first, inv = np.unique(labels, return_index=True, return_inverse=True)
+    order = np.argsort(first, kind="stable")
+    rank = np.empty(order.size, np.int64)
+    rank[order] = np.arange(order.size)
+    return rank[inv.reshape(-1)], [str(n) for n in names[order]]
+
+
+def run(
+    name: str, plots: Plots, table: Mapping[str, Any] | None = None, source: str = "config"
+) -> dict[str, NDArray[Any]]:
+    """Run method ``name`` over every labelled track of ``plots`` (one batch per step).
+
+    Returns the output columns (one value per plot, input order):
+    :data:`COMMON_COLUMNS`, ``status``, ``nis``, then the method's own columns.
+    """
+    labels = plots.track if plots.track is not None else np.zeros(len(plots), dtype=str)
+    ti, _ = track_index(labels)
+    m = build(name, table, d=plots.d, range_rate=plots.has_range_rate, source=source)
+    cols = run_tracks(m.filter, m.prepare(plots), ti, m.initiate)
+    first = [*COMMON_COLUMNS, "status", "nis"]
+    return {c: cols[c] for c in first} | {c: v for c, v in cols.items() if c not in first}
+
+
+def describe_method(name: str) -> list[tuple[str, Any, str, str]]:
+    """``(key, default, unit, doc)`` of a method's own keys (for docs and tests)."""
+    from seatrack.config import describe
+
+    return describe(method_class(name).Config)

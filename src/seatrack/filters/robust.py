@@ -64,10 +64,8 @@ Units: metres, seconds, radians; x = East, y = North; bearings clockwise from No
 
 from __future__ import annotations
 
-from collections.abc import Mapping
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from functools import cached_property
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -96,13 +94,9 @@ __all__ = [
     "BeamState",
     "StepInfo",
     "robust_step",
+    "robust_update",
     "robust_filter",
-    "track_plots_robust",
-    "track_plots_robust_adaptive",
-    "plots_to_arrays",
     "check_track_inputs",
-    "config_from_mapping",
-    "estimates_to_columns",
 ]
 
 
@@ -274,7 +268,7 @@ class TrackEstimates:
 # ---------------------------------------------------------------------------
 # Pure functions
 # ---------------------------------------------------------------------------
-def axis_transition(dt: float, order: int) -> FloatArray:
+def axis_transition(dt: ArrayLike, order: int) -> FloatArray:
     """Per-axis polynomial transition ``Phi`` (spec "Filter model"): ``order`` 2 gives
     ``[[1, dt], [0, 1]]`` (:func:`~seatrack.models.motion.cv_transition` of one axis), 3 adds
     the acceleration (:func:`~seatrack.models.motion.ca_transition` of one axis)."""
@@ -285,7 +279,7 @@ def axis_transition(dt: float, order: int) -> FloatArray:
     raise ValueError(f"order must be 2 or 3, got {order}")
 
 
-def axis_noise(dt: float, sigma: float, order: int) -> FloatArray:
+def axis_noise(dt: ArrayLike, sigma: float, order: int) -> FloatArray:
     """Per-axis disturbance noise ``L0 = sigma^2 G G^T`` (see :class:`SonarModel`).
 
     Order 2: piecewise-constant white acceleration, ``G = [dt^2/2, dt]``
@@ -296,8 +290,9 @@ def axis_noise(dt: float, sigma: float, order: int) -> FloatArray:
         return cv_noise_discrete(dt, sigma, d=1)
     if order != 3:
         raise ValueError(f"order must be 2 or 3, got {order}")
-    g = np.array([0.5 * dt * dt, dt, 1.0])
-    return (sigma * sigma) * np.outer(g, g)
+    t = np.asarray(dt, dtype=float)
+    g = np.stack([0.5 * t * t, t, np.ones_like(t)], -1)
+    return np.asarray((sigma * sigma) * g[..., :, None] * g[..., None, :])
 
 
 def per_axis_to_flat(block: ArrayLike) -> FloatArray:
@@ -527,9 +522,6 @@ def robust_step(
     m, c = model, config
     k = m.order
     zz = np.asarray(z, dtype=float)
-    B = zz.shape[0]
-    H = np.zeros((1, k))
-    H[0, 0] = 1.0
     Phi = axis_transition(dt, k)
     use_base = (not adaptive) or c.base_noise
     L0 = axis_noise(dt, m.sigma_a, k) if use_base else np.zeros((k, k))
@@ -540,12 +532,41 @@ def robust_step(
     if c.rotate_covariance:
         Pc = rotate_blocks(Pc, angle_diff(psi, state.psi))
     _, P0 = extended_predict(Xp, Pc, Phi, L0)
+    return robust_update(Xp, P0, Pc, psi, r_pred, innov, state.jwin, m, c, adaptive)
+
+
+def robust_update(
+    Xp: FloatArray,
+    P0: FloatArray,
+    Pc_prev: FloatArray,
+    psi: FloatArray,
+    r_pred: FloatArray,
+    innov: FloatArray,
+    jwin: FloatArray,
+    model: SonarModel,
+    config: RobustConfig,
+    adaptive: bool,
+) -> tuple[BeamState, StepInfo]:
+    """Steps 2-6 of algorithm R or A after the prediction (shared by :func:`robust_step`
+    and the contract class :class:`Robust`).
+
+    Parameters
+    ----------
+    Xp : (B, 2, k) predicted per-axis state; P0 : (B, 2, k, k) predicted channel blocks
+        (in the new beam frame); Pc_prev : (B, 2, k, k) the previous blocks (algorithm A
+        injects ``Pc_prev / l_factor``); psi, r_pred, innov : see :func:`beam_innovations`;
+        jwin : (B, 2, n) the J window.
+    """
+    m, c = model, config
+    k = m.order
+    B = Xp.shape[0]
+    H = np.zeros((1, k))
+    H[0, 0] = 1.0
     # 2. innovations and their nominal variances (eta: R'^2 sigma_AZ^2, sigma in radians)
     q0 = np.stack([np.full(B, m.sigma_range**2), r_pred**2 * m.sigma_bearing**2], -1)
     valid = np.isfinite(innov)
     innov = np.where(valid, innov, 0.0)
     Pp = P0
-    jwin = state.jwin
     flag = np.zeros((B, 2), dtype=bool)
     if adaptive:
         # A: windowed divergence test on J computed without the injected noise
@@ -554,14 +575,14 @@ def robust_step(
             J = np.minimum(J, c.delta)
         jwin = np.concatenate([np.where(valid, J, 0.0)[..., None], jwin[..., :-1]], -1)
         flag = jwin.sum(-1) > c.delta_sum
-        Pp = P0 + np.where(flag[..., None, None], Pc / c.l_factor[:, None, None], 0.0)
+        Pp = P0 + np.where(flag[..., None, None], Pc_prev / c.l_factor[:, None, None], 0.0)
     # 3.-5. outlier test and robust variance with the final prediction
     q, gamma = robust_variance(innov, Pp[..., 0, 0], q0, c.delta)
     if adaptive and not c.robust_gain:
         q = q0
     gamma &= valid
     # 6. scalar Joseph-form update per channel; correction rotated back to (E, N)
-    res = update(np.zeros((B, 2, k)), Pp, innov[..., None], H, q[..., None, None])
+    res = update(np.zeros((B, 2, k)), Pp, innov[..., None], H, q[..., None, None], False)
     dXb = np.where(valid[..., None], res.x, 0.0)
     Pc_new = np.where(valid[..., None, None], res.P, Pp)
     X = Xp + np.einsum("bca,bci->bai", rotation_to_beam(psi), dXb)
@@ -615,101 +636,3 @@ def robust_filter(
         xs[:, n] = _flat_state(state.X)
         Ps[:, n] = beam_to_cartesian_cov(state.Pc, state.psi)
     return TrackEstimates(xs, Ps, outl, adapt)
-
-
-# ---------------------------------------------------------------------------
-# seatrack track runners
-# ---------------------------------------------------------------------------
-def config_from_mapping(config: Mapping[str, Any], *classes: type) -> list[Any]:
-    """Build one configuration dataclass per class from a flat mapping (a TOML table).
-
-    Keys are the field names of the classes; ``sigma_bearing_deg`` (degrees, at the edge)
-    is accepted for ``sigma_bearing``. The track-method keys shared by every method
-    (:data:`seatrack.filters.registry.COMMON_CONFIG_KEYS`) are accepted too:
-    ``sigma_range_m`` sets ``sigma_range`` and ``sigma_azimuth_deg`` sets ``sigma_bearing``;
-    ``sigma_elevation_deg`` and ``sigma_range_rate_mps`` are ignored (these filters are
-    2-D and do not use range rate). Unknown keys raise ValueError naming them and the
-    valid ones; bad values raise the dataclasses' own ValueError.
-    """
-    from seatrack.filters.registry import COMMON_CONFIG_KEYS
-
-    cfg = dict(config)
-    aliases = {"sigma_range_m": "sigma_range", "sigma_azimuth_deg": "sigma_bearing_deg"}
-    for common, own in aliases.items():
-        if common in cfg:
-            value = cfg.pop(common)
-            if own in cfg or (own == "sigma_bearing_deg" and "sigma_bearing" in cfg):
-                raise ValueError(f"give {common} or {own}, not both")
-            cfg[own] = value
-    for key in COMMON_CONFIG_KEYS:
-        cfg.pop(key, None)
-    names = [{f.name for f in fields(cls)} for cls in classes]
-    valid = set().union(*names)
-    if "sigma_bearing" in valid:
-        valid.add("sigma_bearing_deg")
-    unknown = sorted(set(cfg) - valid)
-    if unknown:
-        raise ValueError(
-            f"unknown configuration key(s) {', '.join(unknown)}; "
-            f"valid keys: {', '.join(sorted(valid | set(COMMON_CONFIG_KEYS)))}"
-        )
-    out = []
-    for cls, nm in zip(classes, names, strict=True):
-        kw = {key: cfg[key] for key in nm if key in cfg}
-        if "sigma_bearing" in nm and "sigma_bearing_deg" in cfg:
-            if "sigma_bearing" in cfg:
-                raise ValueError("give sigma_bearing (rad) or sigma_bearing_deg, not both")
-            kw["sigma_bearing"] = float(np.deg2rad(float(cfg["sigma_bearing_deg"])))
-        try:
-            out.append(cls(**kw))
-        except TypeError as exc:  # e.g. a string where a number is expected
-            raise ValueError(f"bad configuration value: {exc}") from exc
-    return out
-
-
-def plots_to_arrays(plots: Any) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """``PlotTrack`` to ``t (N,)``, ``z (1, N, 2)`` [horizontal range, bearing], sensor (1, N, 2).
-
-    With 3-D plots the horizontal range ``r cos(elevation)`` is used (2-D filter).
-    """
-    rng = np.asarray(plots.range, dtype=float)
-    if plots.elevation is not None:
-        rng = rng * np.cos(plots.elevation)
-    z = np.stack([rng, np.asarray(plots.azimuth, dtype=float)], -1)[None]
-    return np.asarray(plots.t, dtype=float), z, np.asarray(plots.sensor, dtype=float)[None, :, :2]
-
-
-def estimates_to_columns(est: TrackEstimates) -> dict[str, FloatArray]:
-    """``seatrack track`` columns of the first track of ``est``: the common ones of
-    :func:`seatrack.filters.ekf.output_columns` (2-D: z, vz and their std are 0) plus
-    ``outlier_range``, ``outlier_bearing`` and ``adapting`` (0/1)."""
-    from seatrack.filters.ekf import output_columns
-
-    cols = output_columns(est.x[0], est.P[0], 2)
-    cols["outlier_range"] = est.outlier[0, :, 0].astype(np.int64)
-    cols["outlier_bearing"] = est.outlier[0, :, 1].astype(np.int64)
-    cols["adapting"] = est.adapting[0].any(-1).astype(np.int64)
-    return cols
-
-
-def _run(plots: Any, config: Mapping[str, Any], adaptive: bool) -> dict[str, FloatArray]:
-    model, cfg = config_from_mapping(config, SonarModel, RobustConfig)
-    t, z, s = plots_to_arrays(plots)
-    est = robust_filter(t, z, s, model, cfg, adaptive=adaptive)
-    return estimates_to_columns(est)
-
-
-def track_plots_robust(plots: Any, config: Mapping[str, Any]) -> dict[str, FloatArray]:
-    """``seatrack track --method robust``: algorithm R on 2-D range/bearing plots.
-
-    ``config`` keys: any field of :class:`SonarModel` / :class:`RobustConfig`
-    (``sigma_bearing_deg`` in degrees also accepted). Extra columns ``outlier_range``,
-    ``outlier_bearing`` (0/1, the gamma of step 3) and ``adapting`` (always 0 for R).
-    """
-    return _run(plots, config, adaptive=False)
-
-
-def track_plots_robust_adaptive(plots: Any, config: Mapping[str, Any]) -> dict[str, FloatArray]:
-    """``seatrack track --method robust-adaptive``: algorithm A; ``adapting`` = 1 while
-    noise is injected into either beam channel."""
-    return _run(plots, config, adaptive=True)

@@ -26,9 +26,9 @@ initialisation of the robust filter (:class:`~seatrack.filters.robust.SonarModel
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any
+from functools import partial
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -40,11 +40,8 @@ from seatrack.filters.robust import (
     axis_transition,
     beam_to_cartesian_cov,
     check_track_inputs,
-    config_from_mapping,
-    estimates_to_columns,
     initial_state,
     per_axis_to_flat,
-    plots_to_arrays,
 )
 from seatrack.kalman import UpdateResult, extended_update, predict
 from seatrack.models.measurement import RangeBearing
@@ -58,9 +55,9 @@ __all__ = [
     "clairvoyant_filter",
     "huber_filter",
     "student_t_filter",
-    "track_plots_ekf",
-    "track_plots_huber",
-    "track_plots_student_t",
+    "plain_update",
+    "huber_update",
+    "student_t_update",
 ]
 
 _ANGULAR = np.array([False, True])
@@ -182,10 +179,17 @@ def _run_ekf(
     return TrackEstimates(xs, Ps, outl, np.zeros((B, N, 2), dtype=bool))
 
 
-def _plain_step(
-    x: FloatArray, P: FloatArray, z: FloatArray, hx: FloatArray, H: FloatArray, R: FloatArray
+def plain_update(
+    x: FloatArray,
+    P: FloatArray,
+    z: FloatArray,
+    hx: FloatArray,
+    H: FloatArray,
+    R: FloatArray,
+    check: bool = True,
 ) -> tuple[UpdateResult, NDArray[np.bool_]]:
-    res = extended_update(x, P, z, hx, H, R, _ANGULAR)
+    """The EKF update of :func:`ekf_filter` (flags: diagnostic only)."""
+    res = extended_update(x, P, z, hx, H, R, _ANGULAR, check)
     # diagnostic flag only (the EKF does not act on it): per-component chi-square 1 dof 99 %
     flags = res.y**2 > 6.63 * np.diagonal(res.S, axis1=-2, axis2=-1)
     return res, flags
@@ -200,7 +204,7 @@ def ekf_filter(
     diagnostic only: the per-component normalised innovation exceeds 6.63 (chi-square 1 dof
     99 %); the EKF uses every plot as it is.
     """
-    return _run_ekf(t, z, sensor, model or SonarModel(), _plain_step)
+    return _run_ekf(t, z, sensor, model or SonarModel(), plain_update)
 
 
 def clairvoyant_filter(
@@ -269,22 +273,54 @@ def huber_filter(
     m = model or SonarModel()
     cfg = config or HuberConfig()
     r_nom = _nominal_r(m)
+    return _run_ekf(t, z, sensor, m, partial(huber_update, r_nom=r_nom, config=cfg))
 
-    def step(
-        x: FloatArray, P: FloatArray, zn: FloatArray, hx: FloatArray, H: FloatArray, R: FloatArray
-    ) -> tuple[UpdateResult, NDArray[np.bool_]]:
-        w = np.ones(x.shape[:-1] + (2,))
-        res = extended_update(x, P, zn, hx, H, R, _ANGULAR)
-        y = res.y  # innovation (bearing wrapped)
-        e = y
-        for _ in range(cfg.iterations):
-            u = np.abs(e) / np.sqrt(r_nom)
-            w = np.minimum(1.0, cfg.c / np.maximum(u, 1e-300))
-            res = extended_update(x, P, zn, hx, H, _diag(r_nom / w), _ANGULAR)
-            e = y - np.einsum("...ij,...j->...i", H, res.x - x)
-        return res, w < 1.0
 
-    return _run_ekf(t, z, sensor, m, step)
+def _reweighted(
+    x: FloatArray,
+    P: FloatArray,
+    zn: FloatArray,
+    hx: FloatArray,
+    H: FloatArray,
+    R: FloatArray,
+    r_nom: FloatArray,
+    iterations: int,
+    weights: Callable[[FloatArray, UpdateResult], tuple[FloatArray, NDArray[np.bool_]]],
+    prior_first: bool,
+    check: bool,
+) -> tuple[UpdateResult, NDArray[np.bool_]]:
+    """Iteratively reweighted EKF update: ``R = diag(r_nom / w)`` with weights ``w`` from the
+    residuals ``e`` (the innovation first when ``prior_first``, else the residual at the
+    plain update's estimate); returns the last update and the last weights' flags."""
+    res = extended_update(x, P, zn, hx, H, R, _ANGULAR, check)
+    y = res.y  # innovation (bearing wrapped)
+    flags = np.zeros(x.shape[:-1] + (2,), dtype=bool)
+    for i in range(iterations):
+        e = y if (prior_first and i == 0) else y - np.einsum("...ij,...j->...i", H, res.x - x)
+        w, flags = weights(e, res)
+        res = extended_update(x, P, zn, hx, H, _diag(r_nom / w), _ANGULAR, check)
+    return res, flags
+
+
+def huber_update(
+    x: FloatArray,
+    P: FloatArray,
+    zn: FloatArray,
+    hx: FloatArray,
+    H: FloatArray,
+    R: FloatArray,
+    r_nom: FloatArray,
+    config: HuberConfig,
+    check: bool = True,
+) -> tuple[UpdateResult, NDArray[np.bool_]]:
+    """The Huber IRLS measurement update of :func:`huber_filter` (flags: weight < 1)."""
+
+    def weights(e: FloatArray, _: UpdateResult) -> tuple[FloatArray, NDArray[np.bool_]]:
+        u = np.abs(e) / np.sqrt(r_nom)
+        w = np.minimum(1.0, config.c / np.maximum(u, 1e-300))
+        return w, w < 1.0
+
+    return _reweighted(x, P, zn, hx, H, R, r_nom, config.iterations, weights, True, check)
 
 
 def student_t_filter(
@@ -304,55 +340,31 @@ def student_t_filter(
     """
     m = model or SonarModel()
     cfg = config or StudentTConfig()
-    r_nom = _nominal_r(m)
-    nu = cfg.nu
-
-    def step(
-        x: FloatArray, P: FloatArray, zn: FloatArray, hx: FloatArray, H: FloatArray, R: FloatArray
-    ) -> tuple[UpdateResult, NDArray[np.bool_]]:
-        res = extended_update(x, P, zn, hx, H, R, _ANGULAR)
-        y = res.y
-        a = np.zeros(x.shape[:-1] + (2,))
-        for _ in range(cfg.iterations):
-            e = y - np.einsum("...ij,...j->...i", H, res.x - x)
-            hph = np.einsum("...ij,...jk,...ik->...i", H, res.P, H)
-            a = (e**2 + hph) / r_nom
-            if cfg.per_component:
-                lam = (nu + 1.0) / (nu + a)
-            else:
-                lam = np.repeat(((nu + 2.0) / (nu + a.sum(-1)))[..., None], 2, -1)
-            res = extended_update(x, P, zn, hx, H, _diag(r_nom / lam), _ANGULAR)
-        return res, a > cfg.flag_threshold
-
-    return _run_ekf(t, z, sensor, m, step)
+    return _run_ekf(t, z, sensor, m, partial(student_t_update, r_nom=_nominal_r(m), config=cfg))
 
 
-# ---------------------------------------------------------------------------
-# seatrack track runners
-# ---------------------------------------------------------------------------
-def track_plots_ekf(plots: Any, config: Mapping[str, Any]) -> dict[str, FloatArray]:
-    """``seatrack track --method ekf-rb``: the baseline range/bearing EKF (config keys: the
-    fields of :class:`~seatrack.filters.robust.SonarModel`). ``outlier_*`` are diagnostic
-    (normalised innovation > 6.63); ``adapting`` is 0."""
-    t, z, s = plots_to_arrays(plots)
-    (model,) = config_from_mapping(config, SonarModel)
-    return estimates_to_columns(ekf_filter(t, z, s, model))
+def student_t_update(
+    x: FloatArray,
+    P: FloatArray,
+    zn: FloatArray,
+    hx: FloatArray,
+    H: FloatArray,
+    R: FloatArray,
+    r_nom: FloatArray,
+    config: StudentTConfig,
+    check: bool = True,
+) -> tuple[UpdateResult, NDArray[np.bool_]]:
+    """The VB Student-t measurement update of :func:`student_t_filter` (flags: expected
+    normalised squared residual > ``flag_threshold``)."""
+    nu = config.nu
 
+    def weights(e: FloatArray, res: UpdateResult) -> tuple[FloatArray, NDArray[np.bool_]]:
+        hph = np.einsum("...ij,...jk,...ik->...i", H, res.P, H)
+        a = (e**2 + hph) / r_nom
+        if config.per_component:
+            lam = (nu + 1.0) / (nu + a)
+        else:
+            lam = np.repeat(((nu + 2.0) / (nu + a.sum(-1)))[..., None], 2, -1)
+        return lam, a > config.flag_threshold
 
-def track_plots_huber(plots: Any, config: Mapping[str, Any]) -> dict[str, FloatArray]:
-    """``seatrack track --method huber``: Huber M-estimation EKF (config keys: fields of
-    SonarModel and :class:`HuberConfig`). ``outlier_*``: Huber weight < 1; ``adapting`` 0."""
-    t, z, s = plots_to_arrays(plots)
-    model, cfg = config_from_mapping(config, SonarModel, HuberConfig)
-    est = huber_filter(t, z, s, model, cfg)
-    return estimates_to_columns(est)
-
-
-def track_plots_student_t(plots: Any, config: Mapping[str, Any]) -> dict[str, FloatArray]:
-    """``seatrack track --method student-t``: VB Student-t EKF (config keys: fields of
-    SonarModel and :class:`StudentTConfig`). ``outlier_*``: expected normalised squared
-    residual > ``flag_threshold``; ``adapting`` 0."""
-    t, z, s = plots_to_arrays(plots)
-    model, cfg = config_from_mapping(config, SonarModel, StudentTConfig)
-    est = student_t_filter(t, z, s, model, cfg)
-    return estimates_to_columns(est)
+    return _reweighted(x, P, zn, hx, H, R, r_nom, config.iterations, weights, False, check)

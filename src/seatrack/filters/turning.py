@@ -11,15 +11,18 @@ are plain arithmetic broadcast over leading dimensions):
   ``seatrack.models``); :func:`initial_state` starts it from the first plot.
 * S2 :func:`velocity_significance` (``d_t``), :func:`heading`, :func:`heading_variance`,
   :func:`heading_filter_init` / :func:`heading_filter_step` (the (b, omega) filter with
-  the wrapped heading innovation).
+  the wrapped heading innovation; :mod:`seatrack.filters.heading`).
 * S3 :func:`turn_rate_significance` (``d_omega``) and :func:`push_turn_rate` (FIFO queue).
 * S4 :func:`fuzzy_vote` (rising / falling count vote with the ``delta_omega`` threshold).
 * S5 :func:`noise_gain` ``c(delta_omega)``; the gain applies to the next prediction only
   and returns to 1 (nominal ``Q``) on any scan where S5 does not fire.
 * S6 the output point: :class:`TurningStep` (one scan) / :class:`TurningTrack` (a run).
 
-:class:`TurningFilter` is the thin stateful shell that strings the steps together;
-:func:`track_plots` is the ``seatrack track --method turning`` runner.
+:class:`Turning` is the method on the filter contract (``seatrack track --method
+turning``): the whole batch of tracks per step, S1 through :mod:`seatrack.kalman`, S2-S5
+compiled (:mod:`seatrack.filters.turning_kernel`, equal to the pure functions above); its
+state (heading filter, turn-rate queue, gain) is explicit in ``TrackState.aux``.
+:class:`TurningFilter` is a one-track, plot-by-plot shell over it.
 
 Conventions: x East, y North, z Up; SI units and radians inside. Heading and azimuth are
 clockwise from North (``atan2(vE, vN)``); the heading-filter state and every angle
@@ -32,23 +35,47 @@ convention is used, the two differ only at the single point ``-pi``). The turn r
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, fields
 from enum import IntEnum
 from functools import lru_cache
-from typing import Any, Literal
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from seatrack import kalman
-from seatrack.geometry import bearing, wrap_pi
-from seatrack.models import RangeBearing, RangeBearingElevation
-from seatrack.models.measurement import (
-    range_bearing_elevation_jacobian,
-    range_bearing_jacobian,
+from seatrack.config import param
+from seatrack.filters.base import (
+    Plots,
+    PlotStatus,
+    SensorNoise,
+    TrackState,
+    cartesian_names,
+    common_columns,
+    finish_update,
+    plot_gaussian,
+    predicted,
+    speed_sigma_param,
+    step_times,
+    usable,
+    wrap_angles,
 )
-from seatrack.models.motion import cv_noise, cv_transition
+from seatrack.filters.heading import (
+    HeadingEstimate,
+    heading,
+    heading_filter_init,
+    heading_filter_noise,
+    heading_filter_step,
+    heading_jacobian,
+    heading_variance,
+    velocity_significance,
+)
+from seatrack.filters.turning_kernel import turn_logic
+from seatrack.geometry import bearing
+from seatrack.models import RangeBearing, RangeBearingElevation
+from seatrack.models.measurement import polar_measurement
+from seatrack.models.motion import cv_matrices, cv_noise, cv_transition
 
 FloatArray = NDArray[np.float64]
 
@@ -59,6 +86,7 @@ __all__ = [
     "TurningStep",
     "TurningTrack",
     "TurningFilter",
+    "Turning",
     "initial_state",
     "ekf_step",
     "velocity_significance",
@@ -72,7 +100,6 @@ __all__ = [
     "push_turn_rate",
     "fuzzy_vote",
     "noise_gain",
-    "track_plots",
 ]
 
 
@@ -93,72 +120,73 @@ class TurnState(IntEnum):
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class TurningConfig:
-    """Parameters of the turning-target filter (defaults from ``specs/turning.md``).
+    """Parameters of the turning-target filter (defaults from ``specs/turning.md``); the
+    plot noise is the shared sensor section (:class:`~seatrack.filters.base.SensorNoise`).
+
+    Keys (``--config``) in brackets; fields are SI and radians.
 
     Parameters
     ----------
-    q_nominal : float
-        S1 nominal process noise: white-acceleration PSD of the CV-EKF, m^2/s^3
-        ([reading] continuous white-noise acceleration, ``Q_nom = q cv_noise``). Not
-        given in the patent; choose for the target class (tuned values in
-        ``benchmarks/turning.py``).
-    sigma_range, sigma_azimuth, sigma_elevation : float
-        Plot noise standard deviations, m, rad, rad (radar property, not the patent's).
-    sigma_velocity0 : float
-        Standard deviation of the initial velocity (m/s per axis): the EKF starts at the
-        first plot with zero velocity ([reading] initialisation is not described).
-    velocity_threshold : float or None
-        S2 threshold on ``d_t = sum v_i^2 / sigma_i^2``; ``None`` = N, the number of
-        velocity components (2 or 3), as in the spec.
-    heading_cross_covariance : bool
-        S2 heading variance from the full 2x2 horizontal velocity covariance instead of
-        the spec's diagonal-only formula (default False = the spec).
-    sigma_omega0 : float
-        S2 initial turn-rate standard deviation of the heading filter, rad/s
+    q_nominal : [``q``] S1 nominal process noise: white-acceleration PSD of the CV-EKF,
+        m^2/s^3 ([reading] continuous white-noise acceleration, ``Q_nom = q cv_noise``).
+        Not given in the patent; choose for the target class (``benchmarks/turning.py``).
+    sigma_velocity0 : [``initial_speed_sigma_mps``] standard deviation of the initial
+        velocity (m/s per axis): the EKF starts at the first plot with zero velocity.
+    velocity_threshold : S2 threshold on ``d_t = sum v_i^2 / sigma_i^2``; ``None`` = N, the
+        number of velocity components (2 or 3), as in the spec.
+    heading_cross_covariance : S2 heading variance from the full 2x2 horizontal velocity
+        covariance instead of the spec's diagonal-only formula (default False = the spec).
+    sigma_omega0 : [``sigma_omega0_dps``] S2 initial turn-rate std of the heading filter
         ([reading] "large, configurable"; 0.1 rad/s ~ 5.7 deg/s).
-    q_heading : float
-        S2 heading-filter process noise ``q`` (rad^2/s^3), spec value 1e-6.
-    heading_noise : {"continuous", "diagonal"}
-        S2 form of the heading-filter noise ([reading]): ``q [[D^3/3, D^2/2], [D^2/2, D]]``
-        or ``q diag(D^3/3, D)``.
-    turn_rate_threshold : float
-        S3 threshold on ``d_omega = |omega / sigma_omega|`` (spec: 1).
-    queue_length : int
-        S3/S4 ``M`` (> 3; not given in the patent, default 5).
-    count_min : int or None
-        S4 count condition ``N >= K``; ``None`` = ``M - 2`` ([reading] "fuzzy" vote
+    q_heading : S2 heading-filter process noise ``q`` (rad^2/s^3), spec value 1e-6.
+    heading_noise : {"continuous", "diagonal"} S2 form of the heading-filter noise
+        ([reading]): ``q [[D^3/3, D^2/2], [D^2/2, D]]`` or ``q diag(D^3/3, D)``.
+    turn_rate_threshold : S3 threshold on ``d_omega = |omega / sigma_omega|`` (spec: 1).
+    queue_length : S3/S4 ``M`` (> 3; not given in the patent, default 5).
+    count_min : S4 count condition ``N >= K``; ``None`` = ``M - 2`` ([reading] "fuzzy" vote
         tolerating one violated comparison).
-    delta_omega_threshold : float
-        S4 threshold on ``delta_omega = |omega_M - omega_1|``, rad/s (spec: 0.02).
-    gain_reference, gain_power, gain_max : float
-        S5 ``c = clip((delta_omega / gain_reference) ** gain_power, 1, gain_max)``
-        ([reading] formula missing; default ``(delta_omega / 0.02)^2`` capped at 100).
+    delta_omega_threshold : [``delta_omega_threshold_dps``] S4 threshold on
+        ``delta_omega = |omega_M - omega_1|``, rad/s (spec: 0.02).
+    gain_reference, gain_power, gain_max : S5
+        ``c = clip((delta_omega / gain_reference) ** gain_power, 1, gain_max)`` ([reading]
+        formula missing; default ``(delta_omega / 0.02)^2`` capped at 100);
+        ``gain_reference`` key ``gain_reference_dps``.
     """
 
-    q_nominal: float = 0.5
-    sigma_range: float = 50.0
-    sigma_azimuth: float = math.radians(0.1)
-    sigma_elevation: float = math.radians(0.1)
-    sigma_velocity0: float = 300.0
-    velocity_threshold: float | None = None
-    heading_cross_covariance: bool = False
-    sigma_omega0: float = 0.1
-    q_heading: float = 1e-6
-    heading_noise: Literal["continuous", "diagonal"] = "continuous"
-    turn_rate_threshold: float = 1.0
-    queue_length: int = 5
-    count_min: int | None = None
-    delta_omega_threshold: float = 0.02
-    gain_reference: float = 0.02
-    gain_power: float = 2.0
-    gain_max: float = 100.0
+    q_nominal: float = param(
+        0.5, key="q", unit="m^2/s^3", doc="nominal white-acceleration PSD", min=0,
+        exclusive_min=True,
+    )  # fmt: skip
+    sigma_velocity0: float = speed_sigma_param(300.0, aliases=("sigma_velocity0_mps",))
+    velocity_threshold: float | None = param(None, doc="S2 threshold on d_t (None: N)", min=0)
+    heading_cross_covariance: bool = param(False, doc="S2 heading variance with cross term")
+    sigma_omega0: float = param(
+        math.degrees(0.1), key="sigma_omega0_dps", unit="deg/s",
+        doc="S2 initial turn-rate std", min=0, exclusive_min=True,
+    )  # fmt: skip
+    q_heading: float = param(
+        1e-6, unit="rad^2/s^3", doc="S2 heading-filter PSD", min=0, exclusive_min=True
+    )
+    heading_noise: str = param(
+        "continuous", choices=("continuous", "diagonal"), doc="S2 heading-filter noise form"
+    )
+    turn_rate_threshold: float = param(1.0, doc="S3 threshold on d_omega", min=0)
+    queue_length: int = param(5, doc="S3/S4 queue length M (> 3)")
+    count_min: int | None = param(None, doc="S4 count K (None: M - 2)")
+    delta_omega_threshold: float = param(
+        math.degrees(0.02), key="delta_omega_threshold_dps", unit="deg/s",
+        doc="S4 threshold on delta omega", min=0,
+    )  # fmt: skip
+    gain_reference: float = param(
+        math.degrees(0.02), key="gain_reference_dps", unit="deg/s", doc="S5 gain reference",
+        min=0, exclusive_min=True,
+    )  # fmt: skip
+    gain_power: float = param(2.0, doc="S5 gain power", min=0)
+    gain_max: float = param(100.0, doc="S5 gain cap (>= 1)", min=1)
 
     def __post_init__(self) -> None:
         positive = (
             "q_nominal",
-            "sigma_range",
-            "sigma_azimuth",
-            "sigma_elevation",
             "sigma_velocity0",
             "sigma_omega0",
             "q_heading",
@@ -193,6 +221,11 @@ class TurningConfig:
                 f"turning config: count_min K must be an integer in [1, M-1] = [1, {M - 1}], "
                 f"got {K!r}"
             )
+
+    @property
+    def initial_speed_sigma(self) -> float:
+        """The initiator's velocity std (m/s): ``sigma_velocity0``."""
+        return self.sigma_velocity0
 
     @property
     def count(self) -> int:
@@ -237,7 +270,8 @@ def plot_covariance(
 def initial_state(
     z: ArrayLike, R: ArrayLike, sigma_velocity0: float, sensor: ArrayLike | None = None
 ) -> tuple[FloatArray, FloatArray]:
-    """CV state and covariance from one plot ([reading]; spec S1 gives no initialisation).
+    """CV state and covariance from one plot ([reading]; spec S1 gives no initialisation):
+    the one initiator :func:`seatrack.filters.base.plot_gaussian` on one plot.
 
     Position = the plot converted to ENU (plus the sensor position); its covariance is
     ``G R G^T`` with ``G = (dh/dp)^-1`` the inverse of the plot Jacobian (first-order
@@ -253,19 +287,12 @@ def initial_state(
     """
     zz = np.asarray(z, dtype=float)
     d = zz.size
-    r, az = zz[0], zz[1]
-    el = zz[2] if d == 3 else 0.0
-    ce = math.cos(el)
-    rel = np.array([r * ce * math.sin(az), r * ce * math.cos(az), r * math.sin(el)])[:d]
-    s = np.zeros(3) if sensor is None else np.asarray(sensor, dtype=float)
-    J = range_bearing_jacobian(rel) if d == 2 else range_bearing_elevation_jacobian(rel)
-    G = np.linalg.inv(J)
-    x = np.zeros(2 * d)
-    x[:d] = rel + s[:d]
-    P = np.zeros((2 * d, 2 * d))
-    P[:d, :d] = kalman.symmetrize(G @ np.asarray(R, dtype=float) @ G.T)
-    P[d:, d:] = np.eye(d) * sigma_velocity0**2
-    return x, P
+    sd = np.sqrt(np.diagonal(np.asarray(R, dtype=float)))
+    sensor_noise = SensorNoise(sd[0], sd[1], sd[2] if d == 3 else sd[1])
+    s = np.zeros((1, 3)) if sensor is None else np.asarray(sensor, dtype=float)[None]
+    plots = Plots(np.zeros(1), zz[:1], zz[1:2], zz[2:3] if d == 3 else None, sensor=s)
+    x, P = plot_gaussian(plots, sensor_noise, sigma_velocity0, range_rate=False)
+    return x[0], P[0]
 
 
 def ekf_step(
@@ -301,138 +328,6 @@ def ekf_step(
     xp, Pp = kalman.predict(xx, np.asarray(P, dtype=float), F, Q)
     h = measurement_model(d)
     return kalman.extended_update(xp, Pp, z, h.h(xp, sensor), h.jacobian(xp, sensor), R, h.angular)
-
-
-# ---------------------------------------------------------------------------
-# S2: velocity significance, heading, heading / turn-rate filter
-# ---------------------------------------------------------------------------
-def velocity_significance(v: ArrayLike, var: ArrayLike) -> Any:
-    """S2 ``d_t = sum_i v_i^2 / sigma_i^2`` over the last axis (N = 2 or 3 terms).
-
-    A chi-square statistic with N degrees of freedom under ``v = 0``; the velocity is
-    used for the turn rate when ``d_t > N`` ([reading] of the missing formula).
-
-    Parameters
-    ----------
-    v : (..., N) velocity, m/s.
-    var : (..., N) variances ``sigma_i^2`` (diagonal of P), m^2/s^2.
-    """
-    vv = np.asarray(v, dtype=float)
-    return np.sum(vv**2 / np.asarray(var, dtype=float), axis=-1)
-
-
-def heading(v: ArrayLike) -> Any:
-    """S2 heading ``b = atan2(v_E, v_N)`` (rad, clockwise from North) wrapped to ``(-pi, pi]``."""
-    vv = np.asarray(v, dtype=float)
-    return wrap_pi(bearing(vv[..., 0], vv[..., 1]))
-
-
-def heading_jacobian(v: ArrayLike) -> FloatArray:
-    """``d b / d(v_E, v_N) = [v_N, -v_E] / (v_E^2 + v_N^2)`` (rad s/m), shape ``(..., 2)``."""
-    vv = np.asarray(v, dtype=float)
-    s2 = vv[..., 0] ** 2 + vv[..., 1] ** 2
-    return np.stack([vv[..., 1] / s2, -vv[..., 0] / s2], -1)
-
-
-def heading_variance(v: ArrayLike, cov: ArrayLike) -> Any:
-    """S2 heading variance ``sigma_b^2`` (rad^2), first order in the velocity error.
-
-    With ``cov`` the variances ``(..., 2)`` ``(sigma_E^2, sigma_N^2)`` this is the spec's
-    ``(v_N^2 sigma_E^2 + v_E^2 sigma_N^2) / (v_E^2 + v_N^2)^2``; with a full ``(..., 2, 2)``
-    covariance it is ``J C J^T`` (J from :func:`heading_jacobian`), which adds the
-    cross term the spec leaves out.
-    """
-    vv = np.asarray(v, dtype=float)[..., :2]
-    C = np.asarray(cov, dtype=float)
-    J = heading_jacobian(vv)
-    if C.ndim >= 2 and C.shape[-2:] == (2, 2) and C.ndim == vv.ndim + 1:
-        return np.einsum("...i,...ij,...j->...", J, C, J)
-    return np.sum(J**2 * C[..., :2], axis=-1)
-
-
-def heading_filter_noise(dt: float, q: float, form: str = "continuous") -> FloatArray:
-    """S2 heading-filter process noise ``Q_b`` (state ``(b, omega)``), rad^2 and rad^2/s^2.
-
-    ``continuous``: ``q [[D^3/3, D^2/2], [D^2/2, D]]`` (white turn-acceleration; the
-    1-D :func:`seatrack.models.motion.cv_noise`); ``diagonal``: ``q diag(D^3/3, D)``.
-    """
-    Q = cv_noise(dt, q, 1)
-    if form == "diagonal":
-        return np.diag(np.diag(Q))
-    if form != "continuous":
-        raise ValueError(f"heading_noise must be 'continuous' or 'diagonal', got {form!r}")
-    return Q
-
-
-def heading_filter_init(
-    b: float, var_b: float, sigma_omega0: float
-) -> tuple[FloatArray, FloatArray]:
-    """S2 first call: ``s = (b, 0)``, ``P0 = diag(sigma_b^2, sigma_omega0^2)``."""
-    return np.array([float(wrap_pi(b)), 0.0]), np.diag([var_b, sigma_omega0**2])
-
-
-_H_HEADING = np.array([[1.0, 0.0]])
-_ANGULAR_HEADING = np.array([True])
-
-
-@dataclass(frozen=True, slots=True)
-class HeadingEstimate:
-    """Output of the heading / turn-rate filter (spec S2).
-
-    Attributes
-    ----------
-    s : (2,) ``(b, omega)``: heading (rad, ``(-pi, pi]``) and turn rate (rad/s, clockwise +).
-    P : (2, 2) covariance; ``P[1, 1] = sigma_omega^2``.
-    innovation : float -- wrapped heading innovation ``wrap(b_t - b')``, rad.
-    gain : (2,) ``(r_b, r_omega)``.
-    """
-
-    s: FloatArray
-    P: FloatArray
-    innovation: float
-    gain: FloatArray
-
-    @property
-    def turn_rate(self) -> float:
-        return float(self.s[1])
-
-    @property
-    def turn_rate_std(self) -> float:
-        return math.sqrt(max(float(self.P[1, 1]), 0.0))
-
-
-def heading_filter_step(
-    s: ArrayLike,
-    P: ArrayLike,
-    b: float,
-    var_b: float,
-    dt: float,
-    q: float = 1e-6,
-    form: str = "continuous",
-) -> HeadingEstimate:
-    """S2 later calls: predict ``b' = b + omega D`` (wrapped), ``omega' = omega``, update on ``b``.
-
-    The innovation ``e = wrap(b_t - b')`` is wrapped to ``(-pi, pi]`` by
-    :func:`seatrack.kalman.extended_update` (angular component), so a heading crossing
-    North (or +-pi) is a small innovation, not a 2 pi jump. Gains
-    ``r_b = P'11 / (P'11 + sigma_b^2)``, ``r_omega = P'21 / (P'11 + sigma_b^2)``; the
-    covariance uses the Joseph form (equal to ``(I - KH) P'`` in exact arithmetic).
-    """
-    F, Qc = _cv_matrices(float(dt), float(q), 1)
-    Qb = Qc if form == "continuous" else heading_filter_noise(dt, q, form)
-    sp, Pp = kalman.predict(np.asarray(s, dtype=float), np.asarray(P, dtype=float), F, Qb)
-    sp[0] = wrap_pi(sp[0])
-    u = kalman.extended_update(
-        sp,
-        Pp,
-        np.array([float(b)]),
-        sp[:1],
-        _H_HEADING,
-        np.array([[float(var_b)]]),
-        _ANGULAR_HEADING,
-    )
-    u.x[0] = wrap_pi(u.x[0])
-    return HeadingEstimate(u.x, u.P, float(u.y[0]), u.K[:, 0].copy())
 
 
 # ---------------------------------------------------------------------------
@@ -561,16 +456,127 @@ class TurningTrack:
 
 
 # ---------------------------------------------------------------------------
-# The stateful filter
+# The filter on the contract (batched), and the one-track shell
 # ---------------------------------------------------------------------------
+class Turning:
+    """The turning-target filter (spec S1-S6) on the filter contract, for a batch of tracks.
+
+    ``TrackState.x``/``P``: the CV-EKF state ``[x, y, (z), vx, vy, (vz)]``. ``aux``: the
+    heading filter ``hs (B, 2)``, ``hP (B, 2, 2)``, ``ht (B,)`` (NaN until it starts), the
+    turn-rate queue ``queue (B, M)`` with ``qn (B,)`` values, the gain for the next
+    prediction ``gain``, and the diagnostics of the last step (``q_gain`` applied,
+    ``d_t``, ``d_w``, ``turn_state``). Every step is a few NumPy operations on the batch.
+    """
+
+    Config = TurningConfig
+    dims: ClassVar[tuple[int, ...]] = (2, 3)
+
+    def __init__(
+        self,
+        config: TurningConfig | None = None,
+        sensor: SensorNoise | None = None,
+        d: int = 2,
+        range_rate: bool = False,
+    ) -> None:
+        self.config = c = config if config is not None else TurningConfig()
+        self.sensor = sensor or SensorNoise()
+        self.model = measurement_model(d)  # validates d
+        self.d = d
+        self.range_rate = False  # the method does not use range rate
+        sn = self.sensor
+        self.R = plot_covariance(sn.sigma_range, sn.sigma_azimuth, sn.sigma_elevation, d)
+        self._angular = self.model.angular.astype(float)
+        self.v_threshold = float(d) if c.velocity_threshold is None else c.velocity_threshold
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return cartesian_names(self.d)
+
+    def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
+        st = TrackState.new(t, x, P)
+        B = len(st)
+        nan = np.full(B, np.nan)
+        aux = {
+            "hs": np.zeros((B, 2)),
+            "hP": np.zeros((B, 2, 2)),
+            "ht": nan,
+            "queue": np.full((B, self.config.queue_length), np.nan),
+            "qn": np.zeros(B, np.int64),
+            "gain": np.ones(B),
+            "q_gain": np.ones(B),
+        }
+        return st.replace(aux=aux | self._turn_logic(st.replace(aux=aux)))
+
+    def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
+        tt, dt = step_times(state, t)
+        gain = state.aux["gain"]
+        F, Q = cv_matrices(dt, self.config.q_nominal, self.d)
+        x, P = kalman.predict(state.x, state.P, F, Q * gain[:, None, None])
+        return predicted(state, tt, x, P, {"q_gain": gain, "gain": np.ones(len(state))})
+
+    def _measurement(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
+        s = np.concatenate([plots.sensor[:, : self.d], plots.sensor_vel[:, : self.d]], -1)
+        return polar_measurement(state.x, s, self.d, False)
+
+    def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
+        hx, H = self._measurement(state, plots)
+        y = wrap_angles(plots.polar(False) - hx, self._angular)
+        return y, kalman.symmetrize(H @ state.P @ np.swapaxes(H, -1, -2) + self.R)
+
+    def update(self, state: TrackState, plots: Plots) -> TrackState:
+        hx, H = self._measurement(state, plots)
+        z, ok = usable(plots.polar(False), hx)
+        with np.errstate(all="ignore"):
+            res = kalman.extended_update(
+                state.x, state.P, z, hx, H, self.R, self._angular, check=False
+            )
+            aux = self._turn_logic(state.replace(x=res.x, P=res.P))
+        return finish_update(state, res.x, res.P, res.nis, res.log_likelihood, state.t, aux, ok)
+
+    def _turn_logic(self, st: TrackState) -> dict[str, Any]:
+        """S2-S5 on the filtered states of a batch (compiled: :func:`turn_logic`)."""
+        c, d, a = self.config, self.d, st.aux
+        B = len(st)
+        hs, hP, ht = a["hs"].copy(), a["hP"].copy(), a["ht"].copy()
+        queue, qn = a["queue"].copy(), a["qn"].copy()
+        d_t, d_w, gain = np.empty(B), np.empty(B), np.empty(B)
+        state = np.empty(B, np.int8)
+        turn_logic(
+            st.x, st.P, st.t, d, hs, hP, ht, queue, qn, self.v_threshold,
+            c.heading_cross_covariance, c.sigma_omega0, c.q_heading,
+            c.heading_noise == "diagonal", c.turn_rate_threshold, c.count,
+            c.delta_omega_threshold, c.gain_reference, c.gain_power, c.gain_max,
+            d_t, d_w, state, gain,
+        )  # fmt: skip
+        return {
+            "hs": hs, "hP": hP, "ht": ht, "queue": queue, "qn": qn, "gain": gain,
+            "d_t": d_t, "d_w": d_w, "turn_state": state,
+        }  # fmt: skip
+
+    def columns(self, state: TrackState) -> dict[str, NDArray[Any]]:
+        a, d = state.aux, self.d
+        cols: dict[str, NDArray[Any]] = dict(common_columns(state.x, state.P, d))
+        v = state.x[:, d:]
+        started = np.isfinite(a["ht"])
+        labels = np.array([s.label for s in TurnState])
+        cols["speed_mps"] = np.hypot(v[:, 0], v[:, 1])
+        cols["heading_deg"] = np.degrees(bearing(v[:, 0], v[:, 1]))
+        cols["turn_rate_dps"] = np.degrees(np.where(started, a["hs"][:, 1], np.nan))
+        std = np.sqrt(np.maximum(a["hP"][:, 1, 1], 0.0))
+        cols["turn_rate_std_dps"] = np.degrees(np.where(started, std, np.nan))
+        cols["turn_state"] = labels[a["turn_state"]]
+        cols["q_gain"] = a["q_gain"]
+        return cols
+
+
 class TurningFilter:
-    """Turning-target filter of CN 104407337 (spec S1-S6) for one track.
+    """One track through :class:`Turning` (a batch of one): the plot-by-plot shell.
 
     Parameters
     ----------
     config : TurningConfig
-    d : int
-        2 (plots = range, azimuth) or 3 (range, azimuth, elevation).
+    d : int -- 2 (plots = range, azimuth) or 3 (range, azimuth, elevation).
+    sensor : SensorNoise -- plot noise (default: the shared sensor default).
 
     Examples
     --------
@@ -578,107 +584,38 @@ class TurningFilter:
     >>> step = f.step(0.0, [10_000.0, 0.5])          # first plot initialises the track
     """
 
-    def __init__(self, config: TurningConfig | None = None, d: int = 2) -> None:
-        self.config = config if config is not None else TurningConfig()
-        measurement_model(d)  # validates d
+    def __init__(
+        self, config: TurningConfig | None = None, d: int = 2, sensor: SensorNoise | None = None
+    ) -> None:
+        self.filter = Turning(config, sensor, d)
+        self.config = self.filter.config
         self.d = d
-        c = self.config
-        self.R = plot_covariance(c.sigma_range, c.sigma_azimuth, c.sigma_elevation, d)
-        self._v_threshold = float(d) if c.velocity_threshold is None else c.velocity_threshold
-        self.reset()
+        self.R = self.filter.R
+        self.state: TrackState | None = None
 
     def reset(self) -> None:
         """Forget the track (the next plot initialises it)."""
-        self.t: float | None = None
-        self.x: FloatArray | None = None
-        self.P: FloatArray | None = None
-        self.gain = 1.0  # c for the next prediction (S5)
-        self.heading_s: FloatArray | None = None
-        self.heading_P: FloatArray | None = None
-        self.heading_t: float | None = None
-        self.queue: tuple[float, ...] = ()
+        self.state = None
 
     def step(self, t: float, z: ArrayLike, sensor: ArrayLike | None = None) -> TurningStep:
         """Process the plot ``z`` (range m, azimuth rad[, elevation rad]) taken at time ``t`` s."""
-        c = self.config
         d = self.d
         zz = np.asarray(z, dtype=float)
         if zz.shape != (d,) or not np.all(np.isfinite(zz)):
             raise ValueError(f"plot at t={t} must be {d} finite values, got {zz.tolist()}")
-        sens = np.zeros(3) if sensor is None else np.asarray(sensor, dtype=float)
-        applied = self.gain
-        # ---- S1
-        if self.x is None or self.P is None or self.t is None:
-            self.x, self.P = initial_state(zz, self.R, c.sigma_velocity0, sens)
-            applied = 1.0
-        else:
-            dt = float(t) - self.t
-            if not dt > 0:
-                raise ValueError(f"plot times must increase: {t} after {self.t}")
-            Q = _cv_matrices(dt, c.q_nominal, d)[1]
-            u = ekf_step(self.x, self.P, zz, dt, Q * applied if applied != 1.0 else Q, self.R, sens)
-            self.x, self.P = u.x, u.P
-        self.t = float(t)
-        x, P = self.x, self.P
-        v = x[d:]
-        var_v = np.diag(P)[d:]
-        # ---- S2
-        state = TurnState.STRAIGHT
-        next_gain = 1.0  # S5 return to Q_nom unless the decision fires
-        d_t = float(velocity_significance(v, var_v))
-        d_w = math.nan
-        if d_t > self._v_threshold:
-            b = float(heading(v))
-            cov = P[d : d + 2, d : d + 2] if c.heading_cross_covariance else var_v[:2]
-            var_b = float(heading_variance(v[:2], cov))
-            if self.heading_s is None or self.heading_P is None or self.heading_t is None:
-                self.heading_s, self.heading_P = heading_filter_init(b, var_b, c.sigma_omega0)
-            else:
-                est = heading_filter_step(
-                    self.heading_s,
-                    self.heading_P,
-                    b,
-                    var_b,
-                    self.t - self.heading_t,
-                    c.q_heading,
-                    c.heading_noise,
-                )
-                self.heading_s, self.heading_P = est.s, est.P
-            self.heading_t = self.t
-            omega = float(self.heading_s[1])
-            # ---- S3
-            d_w = float(turn_rate_significance(omega, self.heading_P[1, 1]))
-            if d_w > c.turn_rate_threshold:
-                self.queue, ready = push_turn_rate(self.queue, omega, c.queue_length)
-                if ready:
-                    # ---- S4
-                    state, delta = fuzzy_vote(self.queue, c.count, c.delta_omega_threshold)
-                    if state is not TurnState.STRAIGHT:
-                        # ---- S5
-                        next_gain = float(
-                            noise_gain(delta, c.gain_reference, c.gain_power, c.gain_max)
-                        )
-        self.gain = next_gain
-        # ---- S6
-        speed = math.hypot(v[0], v[1])
-        if self.heading_s is not None and self.heading_P is not None:
-            w, sw = float(self.heading_s[1]), math.sqrt(self.heading_P[1, 1])
-        else:
-            w, sw = math.nan, math.nan
-        return TurningStep(
-            self.t,
-            x.copy(),
-            P.copy(),
-            speed,
-            float(bearing(v[0], v[1])),
-            w,
-            sw,
-            d_t,
-            d_w,
-            state,
-            applied,
-            next_gain,
+        sens = np.zeros((1, 3)) if sensor is None else np.asarray(sensor, dtype=float)[None]
+        plots = Plots(
+            np.array([float(t)]), zz[:1], zz[1:2], zz[2:3] if d == 3 else None, sensor=sens
         )
+        f = self.filter
+        if self.state is None:
+            x, P = plot_gaussian(plots, f.sensor, self.config.sigma_velocity0, False)
+            self.state = f.initiate(plots.t, x, P)
+        else:
+            if not float(t) > self.state.t[0]:
+                raise ValueError(f"plot times must increase: {t} after {self.state.t[0]}")
+            self.state = f.update(f.predict(self.state, plots.t), plots)
+        return _step_result(self.state, d)
 
     def run(self, t: ArrayLike, z: ArrayLike, sensor: ArrayLike | None = None) -> TurningTrack:
         """Filter a whole track from a fresh start: ``t`` (N,), ``z`` (N, d), ``sensor`` (N, 3)."""
@@ -689,85 +626,17 @@ class TurningFilter:
         return TurningTrack.from_steps([self.step(tt[k], zz[k], ss[k]) for k in range(tt.size)])
 
 
-# ---------------------------------------------------------------------------
-# seatrack track --method turning
-# ---------------------------------------------------------------------------
-#: config keys of :func:`track_plots` given in degrees (converted at this edge)
-_DEGREE_KEYS = {
-    "sigma_azimuth_deg": "sigma_azimuth",
-    "sigma_elevation_deg": "sigma_elevation",
-    "sigma_omega0_dps": "sigma_omega0",
-    "delta_omega_threshold_dps": "delta_omega_threshold",
-    "gain_reference_dps": "gain_reference",
-}
-_SI_KEYS = {
-    "q": "q_nominal",
-    "sigma_range_m": "sigma_range",
-    "sigma_velocity0_mps": "sigma_velocity0",
-}
-
-
-def config_from_mapping(config: Mapping[str, Any]) -> TurningConfig:
-    """Build a :class:`TurningConfig` from a ``--config`` mapping.
-
-    Keys: any :class:`TurningConfig` field name (SI units, radians), or the edge forms
-    ``q`` (m^2/s^3), ``sigma_range_m``, ``sigma_velocity0_mps``, ``sigma_azimuth_deg``,
-    ``sigma_elevation_deg``, ``sigma_omega0_dps``, ``delta_omega_threshold_dps``,
-    ``gain_reference_dps`` (degrees, deg/s). ``sigma_range_rate_mps``, one of the keys every
-    track method accepts (:data:`seatrack.filters.registry.COMMON_CONFIG_KEYS`), is
-    accepted and ignored: the method does not use range rate. Unknown keys raise
-    ``ValueError``.
-    """
-    names = {f.name for f in fields(TurningConfig)}
-    kw: dict[str, Any] = {}
-    for key, val in config.items():
-        if key == "sigma_range_rate_mps":
-            continue
-        if key in _DEGREE_KEYS:
-            kw[_DEGREE_KEYS[key]] = math.radians(float(val))
-        elif key in _SI_KEYS:
-            kw[_SI_KEYS[key]] = float(val)
-        elif key in names:
-            kw[key] = val
-        else:
-            known = sorted(names | set(_DEGREE_KEYS) | set(_SI_KEYS))
-            raise ValueError(f"turning: unknown config key {key!r}; known keys: {', '.join(known)}")
-    return TurningConfig(**kw)
-
-
-def track_plots(plots: Any, config: Mapping[str, Any]) -> dict[str, np.ndarray]:
-    """Run the turning-target filter over one :class:`seatrack.io.plots.PlotTrack`.
-
-    Returns one value per plot for the common columns (``x_m`` ... ``std_z_m``; ``z_m``,
-    ``vz_mps`` and ``std_z_m`` are NaN for 2-D plots) plus ``speed_mps`` (horizontal),
-    ``heading_deg`` ([0, 360), clockwise from North), ``turn_rate_dps`` (clockwise
-    positive; NaN until the heading filter starts), ``turn_rate_std_dps``, ``turn_state``
-    (``straight`` / ``rising`` / ``falling``) and ``q_gain`` (gain applied to ``Q_nom``
-    in that scan's prediction).
-    """
-    cfg = config_from_mapping(config)
-    d = 3 if plots.elevation is not None else 2
-    cols = [plots.range, plots.azimuth] + ([plots.elevation] if d == 3 else [])
-    z = np.stack(cols, -1)
-    res = TurningFilter(cfg, d).run(plots.t, z, plots.sensor)
-    n = res.t.size
-    nan = np.full(n, np.nan)
-    std = np.sqrt(np.diagonal(res.P, axis1=-2, axis2=-1))
-    out: dict[str, np.ndarray] = {
-        "x_m": res.x[:, 0],
-        "y_m": res.x[:, 1],
-        "z_m": res.x[:, 2] if d == 3 else nan,
-        "vx_mps": res.x[:, d],
-        "vy_mps": res.x[:, d + 1],
-        "vz_mps": res.x[:, 5] if d == 3 else nan.copy(),
-        "std_x_m": std[:, 0],
-        "std_y_m": std[:, 1],
-        "std_z_m": std[:, 2] if d == 3 else nan.copy(),
-        "speed_mps": res.speed,
-        "heading_deg": np.degrees(res.heading),
-        "turn_rate_dps": np.degrees(res.turn_rate),
-        "turn_rate_std_dps": np.degrees(res.turn_rate_std),
-        "turn_state": np.array([TurnState(s).label for s in res.state]),
-        "q_gain": res.q_gain,
-    }
-    return out
+def _step_result(st: TrackState, d: int) -> TurningStep:
+    """:class:`TurningStep` of the first track of a batch."""
+    a = st.aux
+    x, P = st.x[0].copy(), st.P[0].copy()
+    v = x[d:]
+    started = bool(np.isfinite(a["ht"][0]))
+    w = float(a["hs"][0, 1]) if started else math.nan
+    sw = math.sqrt(a["hP"][0, 1, 1]) if started else math.nan
+    applied = 1.0 if st.status[0] == PlotStatus.INITIATED else float(a["q_gain"][0])
+    return TurningStep(
+        float(st.t[0]), x, P, math.hypot(v[0], v[1]), float(bearing(v[0], v[1])), w, sw,
+        float(a["d_t"][0]), float(a["d_w"][0]), TurnState(int(a["turn_state"][0])),
+        applied, float(a["gain"][0]),
+    )  # fmt: skip

@@ -2,7 +2,8 @@
 
 Columns (header names exact; extra columns allowed):
 
-* ``track`` (optional): run / track id; rows of one id form one track; default one track.
+* ``track`` (optional): run / track id; rows of one id form one track. Without the column
+  the file is one track labelled ``1``; with it, an empty id is an error.
 * ``time_s``: seconds, strictly increasing within a track.
 * ``range_m``: slant range, m (> 0).
 * ``azimuth_deg``: true azimuth / bearing, degrees clockwise from North, in [0, 360).
@@ -12,22 +13,25 @@ Columns (header names exact; extra columns allowed):
   Up); absent -> sensor at the origin. Sensor velocity (for range rate) is taken from the
   finite differences of its positions.
 
-Inside seatrack angles are radians (converted here, at the edge).
+Values must be physically plausible (:data:`LIMITS`): a range of 1e308 m or a time gap of
+1e15 s within a track is refused with its file and line, not tracked. Inside seatrack
+angles are radians (converted here, at the edge); the result is a
+:class:`seatrack.filters.base.Plots` with the track label of every plot.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.filters.base import Plots
 from seatrack.io.table import InputError, Table, check_times, read_csv_table
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["PlotTrack", "read_plots", "PLOT_COLUMNS"]
+__all__ = ["read_plots", "read_plot_tracks", "split_tracks", "PLOT_COLUMNS", "LIMITS"]
 
 PLOT_COLUMNS = ("time_s", "range_m", "azimuth_deg")
 _OPTIONAL = (
@@ -38,103 +42,179 @@ _OPTIONAL = (
     "sensor_y_m",
     "sensor_z_m",
 )
+_SENSOR = ("sensor_x_m", "sensor_y_m", "sensor_z_m")
+
+#: plausibility limits (absolute values): beyond them a value is an input error
+LIMITS = {
+    "range_m": 1e7,  # 10,000 km: beyond any radar or sonar
+    "time_s": 4.2e9,  # seconds: Unix time of the year 2100
+    "gap_s": 1e6,  # 11.6 days between two plots of one track
+    "range_rate_mps": 1e4,  # 10 km/s
+    "sensor_m": 1e8,  # 100,000 km from the origin of the local frame
+}
 
 
-@dataclass(frozen=True)
-class PlotTrack:
-    """The plots of one track, SI units and radians.
-
-    Attributes
-    ----------
-    track : str
-        Track id.
-    t : (N,) s
-    range : (N,) m
-    azimuth : (N,) rad, clockwise from North, [0, 2 pi)
-    elevation : (N,) rad or None (2-D plots)
-    range_rate : (N,) m/s or None
-    sensor : (N, 3) m  -- sensor position East, North, Up
-    sensor_vel : (N, 3) m/s -- sensor velocity (finite differences of ``sensor``)
-    lines : (N,) int -- source line of each plot
-    """
-
-    track: str
-    t: FloatArray
-    range: FloatArray
-    azimuth: FloatArray
-    elevation: FloatArray | None
-    range_rate: FloatArray | None
-    sensor: FloatArray
-    sensor_vel: FloatArray
-    lines: NDArray[np.int64]
-
-    @property
-    def is_3d(self) -> bool:
-        return self.elevation is not None
-
-    def __len__(self) -> int:
-        return int(self.t.size)
-
-
-def _sensor_velocity(t: FloatArray, s: FloatArray) -> FloatArray:
-    if t.size < 2:
-        return np.zeros_like(s)
-    return np.stack([np.gradient(s[:, k], t) for k in range(3)], -1)
-
-
-def read_plots(path: str | Path) -> list[PlotTrack]:
-    """Read and validate a PLOTS.csv file into one :class:`PlotTrack` per track id.
+def read_plots(path: str | Path) -> Plots:
+    """Read and validate a PLOTS.csv file: all plots, each with its track label.
 
     Raises
     ------
     InputError
         Naming the file, line and problem: missing columns, NaN/inf or empty values,
-        non-positive range, azimuth outside [0, 360), elevation outside [-90, 90],
-        unsorted or duplicate times within a track, a column present for only some rows.
+        non-positive or implausible range, azimuth outside [0, 360), elevation outside
+        [-90, 90], implausible times or time gaps, unsorted or duplicate times within a
+        track, an empty track id, a column present for only some rows.
     """
-    tab = read_csv_table(path, PLOT_COLUMNS, _OPTIONAL, text=("track",))
+    tab = _read_fast(Path(path))
+    if tab is None:  # anything unusual: the row-by-row reader, with its exact messages
+        tab = read_csv_table(path, PLOT_COLUMNS, _OPTIONAL, text=("track",))
     _check_values(tab)
-    check_times(tab, "time_s", group="track", strict=True)
-    ids = tab["track"] if "track" in tab else np.full(len(tab), "1")
-    out = []
-    for tid in dict.fromkeys(ids.tolist()):
-        m = ids == tid
-        sub = tab.subset(m)
-        t = sub["time_s"]
-        sensor = np.zeros((t.size, 3))
-        for k, c in enumerate(("sensor_x_m", "sensor_y_m", "sensor_z_m")):
-            if c in sub:
-                sensor[:, k] = sub[c]
-        out.append(
-            PlotTrack(
-                track=str(tid) if tid != "" else "1",
-                t=t,
-                range=sub["range_m"],
-                azimuth=np.radians(sub["azimuth_deg"]),
-                elevation=np.radians(sub["elevation_deg"]) if "elevation_deg" in sub else None,
-                range_rate=sub["range_rate_mps"] if "range_rate_mps" in sub else None,
-                sensor=sensor,
-                sensor_vel=_sensor_velocity(t, sensor),
-                lines=sub.lines,
-            )
+    if not _times_increase(tab):
+        check_times(tab, "time_s", group="track", strict=True)
+    n = len(tab)
+    labels = tab["track"] if "track" in tab else np.full(n, "1")
+    _check_gaps(tab, labels)
+    t = tab["time_s"]
+    sensor = np.zeros((n, 3))
+    for k, c in enumerate(_SENSOR):
+        if c in tab:
+            sensor[:, k] = tab[c]
+    return Plots(
+        t=t,
+        range=tab["range_m"],
+        azimuth=np.radians(tab["azimuth_deg"]),
+        elevation=np.radians(tab["elevation_deg"]) if "elevation_deg" in tab else None,
+        range_rate=tab["range_rate_mps"] if "range_rate_mps" in tab else None,
+        sensor=sensor,
+        sensor_vel=_sensor_velocity(t, sensor, labels),
+        line=tab.lines,
+        track=labels,
+    )
+
+
+def _read_fast(path: Path) -> Table | None:
+    """Columnar read (pyarrow) of a well-formed file, or None for anything unusual (blank
+    lines, quoted line breaks, padded or empty required cells, text in number columns,
+    literal NaN/inf...), which the row-by-row reader then reports with its line."""
+    import pyarrow as pa
+    import pyarrow.csv as pacsv
+
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return None
+    head = data.split(b"\n", 1)[0].decode("utf-8-sig", "replace").rstrip("\r").split(",")
+    if any(h != h.strip() for h in head) or not set(PLOT_COLUMNS) <= set(head):
+        return None
+    present = [c for c in (*PLOT_COLUMNS, *_OPTIONAL) if c in head]
+    types = {c: (pa.string() if c == "track" else pa.float64()) for c in present}
+    try:
+        table = pacsv.read_csv(
+            pa.BufferReader(data),
+            convert_options=pacsv.ConvertOptions(
+                include_columns=present, column_types=types, strings_can_be_null=False
+            ),
         )
-    return out
+    except (pa.ArrowException, UnicodeDecodeError):
+        return None
+    n = table.num_rows
+    if n == 0 or data.count(b"\n") + (not data.endswith(b"\n")) != n + 1:
+        return None
+    cols: dict[str, NDArray[np.generic]] = {}
+    for c in present:
+        col = table.column(c)
+        if c == "track":
+            labels = np.asarray(col.to_pylist(), dtype=str)
+            if (np.char.strip(labels) != labels).any():
+                return None
+            cols[c] = labels
+            continue
+        a = col.to_numpy(zero_copy_only=False).astype(float)
+        given = ~np.asarray(col.is_null().to_numpy(zero_copy_only=False), dtype=bool)
+        if not np.isfinite(a[given]).all() or (c in PLOT_COLUMNS and not given.all()):
+            return None
+        cols[c] = np.where(given, a, np.nan)
+    return Table(str(path), cols, np.arange(2, n + 2, dtype=np.int64), [], n)
+
+
+def _times_increase(tab: Table) -> bool:
+    """True when times strictly increase within every track (vectorised)."""
+    keys = tab["track"] if "track" in tab else np.zeros(len(tab), dtype=str)
+    order = np.argsort(keys, kind="stable")
+    same = keys[order][1:] == keys[order][:-1]
+    return bool(np.all(np.diff(tab["time_s"][order])[same] > 0))
+
+
+def split_tracks(plots: Plots) -> list[Plots]:
+    """The plots of each track (order of first appearance), each a :class:`Plots`."""
+    labels = plots.track if plots.track is not None else np.full(len(plots), "1")
+    names = dict.fromkeys(labels.tolist())
+    return [plots.take(np.flatnonzero(labels == k)) for k in names]
+
+
+def read_plot_tracks(path: str | Path) -> list[Plots]:
+    """:func:`read_plots` split by track (:func:`split_tracks`)."""
+    return split_tracks(read_plots(path))
+
+
+def _sensor_velocity(t: FloatArray, s: FloatArray, labels: NDArray[np.str_]) -> FloatArray:
+    """Finite-difference sensor velocity, per track (``np.gradient``, 2nd order inside)."""
+    v = np.zeros_like(s)
+    if not s.any():
+        return v
+    for k in dict.fromkeys(labels.tolist()):
+        ix = np.flatnonzero(labels == k)
+        if ix.size >= 2:
+            v[ix] = np.gradient(s[ix], t[ix], axis=0)
+    return v
+
+
+def _bad(tab: Table, mask: NDArray[np.bool_], what: str) -> None:
+    if mask.any():
+        i = int(np.argmax(mask))
+        raise InputError(f"{tab.path}, line {tab.lines[i]}: {what}")
 
 
 def _check_values(tab: Table) -> None:
-    def bad(mask: NDArray[np.bool_], what: str) -> None:
-        if mask.any():
-            i = int(np.argmax(mask))
-            raise InputError(f"{tab.path}, line {tab.lines[i]}: {what}")
-
+    if "track" in tab:
+        _bad(tab, tab["track"] == "", "empty track id (give every row a track id)")
     for c in _OPTIONAL[1:]:
         if c in tab:
             nan = np.isnan(tab[c])
             if nan.any() and not nan.all():
-                bad(nan, f"column {c} is empty here but filled on other rows")
-    bad(tab["range_m"] <= 0, "range_m must be > 0")
+                _bad(tab, nan, f"column {c} is empty here but filled on other rows")
+    rng = tab["range_m"]
+    _bad(tab, rng <= 0, "range_m must be > 0")
+    i = np.argmax(rng > LIMITS["range_m"])
+    _bad(tab, rng > LIMITS["range_m"], f"range_m = {rng[i]:g} is implausible (> 1e7 m)")
+    t = tab["time_s"]
+    i = np.argmax(np.abs(t) > LIMITS["time_s"])
+    _bad(tab, np.abs(t) > LIMITS["time_s"], f"time_s = {t[i]:g} is implausible (|t| > 4.2e9 s)")
     az = tab["azimuth_deg"]
-    bad((az < 0) | (az >= 360), "azimuth_deg must be in [0, 360)")
+    _bad(tab, (az < 0) | (az >= 360), "azimuth_deg must be in [0, 360)")
     if "elevation_deg" in tab:
-        el = tab["elevation_deg"]
-        bad(np.abs(el) > 90, "elevation_deg must be in [-90, 90]")
+        _bad(tab, np.abs(tab["elevation_deg"]) > 90, "elevation_deg must be in [-90, 90]")
+    if "range_rate_mps" in tab:
+        rr = tab["range_rate_mps"]
+        big = np.abs(rr) > LIMITS["range_rate_mps"]
+        _bad(tab, big, f"range_rate_mps = {rr[np.argmax(big)]:g} is implausible (> 1e4 m/s)")
+    for c in _SENSOR:
+        if c in tab:
+            big = np.abs(tab[c]) > LIMITS["sensor_m"]
+            _bad(tab, big, f"{c} = {tab[c][np.argmax(big)]:g} is implausible (> 1e8 m)")
+
+
+def _check_gaps(tab: Table, labels: NDArray[np.str_]) -> None:
+    """Refuse a time gap longer than ``LIMITS["gap_s"]`` between plots of one track."""
+    order = np.lexsort((tab["time_s"], labels))
+    t = tab["time_s"][order]
+    same = labels[order][1:] == labels[order][:-1]
+    gap = np.diff(t)
+    bad = same & (gap > LIMITS["gap_s"])
+    if bad.any():
+        i = int(np.argmax(bad))
+        line = tab.lines[order[i + 1]]
+        raise InputError(
+            f"{tab.path}, line {line}: time gap of {gap[i]:g} s after the previous plot of "
+            "the track is implausible (> 1e6 s); split the track"
+        )

@@ -16,11 +16,13 @@ in ``tests/models/test_measurement.py``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any, Protocol
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from seatrack.geometry import bearing as _bearing
@@ -40,6 +42,7 @@ __all__ = [
     "range_bearing_elevation_jacobian",
     "range_rate",
     "range_rate_jacobian",
+    "polar_measurement",
 ]
 
 
@@ -296,3 +299,63 @@ class Stacked:
 
     def jacobian(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
         return np.concatenate([p.jacobian(x, sensor) for p in self.parts], -2)
+
+
+# ---------------------------------------------------------------------------
+# Compiled polar plot prediction for a batch (range, azimuth, [elevation], [range rate])
+# ---------------------------------------------------------------------------
+@njit(cache=True)
+def _polar_core(x, s, d, rr, hx, H):  # pragma: no cover - compiled
+    """``h(x)`` and its Jacobian for a batch: state positions ``0..d-1``, velocities
+    ``d..2d-1``; sensor ``s = [position (d), velocity (d)]``. Same maths as
+    :class:`RangeBearing`, :class:`RangeBearingElevation` and :class:`RangeRate`."""
+    for b in range(x.shape[0]):
+        for i in range(H.shape[1]):
+            for j in range(H.shape[2]):
+                H[b, i, j] = 0.0
+        dx, dy = x[b, 0] - s[b, 0], x[b, 1] - s[b, 1]
+        rh2 = dx * dx + dy * dy
+        dz = x[b, 2] - s[b, 2] if d == 3 else 0.0
+        r = math.sqrt(rh2 + dz * dz)
+        hx[b, 0] = r
+        az = math.atan2(dx, dy)
+        hx[b, 1] = az + 2.0 * math.pi if az < 0.0 else az
+        H[b, 1, 0], H[b, 1, 1] = dy / rh2, -dx / rh2
+        for k in range(d):
+            H[b, 0, k] = (x[b, k] - s[b, k]) / r
+        m = 2
+        if d == 3:
+            rh = math.sqrt(rh2)
+            hx[b, 2] = math.atan2(dz, rh)
+            r2 = rh2 + dz * dz
+            H[b, 2, 0], H[b, 2, 1], H[b, 2, 2] = -dx * dz / (r2 * rh), -dy * dz / (r2 * rh), rh / r2
+            m = 3
+        if rr:
+            pv = 0.0
+            for k in range(d):
+                pv += (x[b, k] - s[b, k]) * (x[b, d + k] - s[b, d + k])
+            rdot = pv / r
+            hx[b, m] = rdot
+            for k in range(d):
+                p_k = x[b, k] - s[b, k]
+                H[b, m, k] = ((x[b, d + k] - s[b, d + k]) - rdot * p_k / r) / r
+                H[b, m, d + k] = p_k / r
+
+
+def polar_measurement(
+    x: ArrayLike, sensor: ArrayLike, d: int, range_rate: bool = False
+) -> tuple[FloatArray, FloatArray]:
+    """Predicted plots ``h(x) (B, m)`` and Jacobians ``(B, m, n)`` of a batch of states
+    (range, azimuth in ``[0, 2 pi)``, [elevation], [range rate]), compiled.
+
+    ``x (B, n)`` has positions ``0..d-1`` and velocities ``d..2d-1``; ``sensor (B, 2d)`` the
+    sensor position and velocity.
+    """
+    xx = np.ascontiguousarray(x, dtype=np.float64)
+    ss = np.ascontiguousarray(sensor, dtype=np.float64)
+    m = d + int(range_rate)
+    hx = np.empty((xx.shape[0], m))
+    H = np.empty((xx.shape[0], m, xx.shape[1]))
+    with np.errstate(all="ignore"):
+        _polar_core(xx, ss, d, bool(range_rate), hx, H)
+    return hx, H

@@ -20,11 +20,16 @@ Bar-Shalom, Li & Kirubarajan (2001), sections 6.2 (white-noise acceleration mode
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import ClassVar, Protocol
 
 import numpy as np
+from numba import guvectorize, njit
 from numpy.typing import ArrayLike, NDArray
+
+from seatrack.kalman import cov_core
 
 FloatArray = NDArray[np.float64]
 
@@ -35,12 +40,14 @@ __all__ = [
     "CoordinatedTurn",
     "cv_transition",
     "cv_noise",
+    "cv_matrices",
     "cv_noise_discrete",
     "ca_transition",
     "ca_noise",
     "ct_transition",
     "ct_jacobian",
     "ct_noise",
+    "ct_predict",
 ]
 
 
@@ -83,6 +90,21 @@ def cv_noise(dt: ArrayLike, q: ArrayLike, d: int = 2) -> FloatArray:
         * qq[..., None, None]
     )
     return _kron_blocks(blk, d)
+
+
+@lru_cache(maxsize=256)
+def _cv_pair(dt: float, q: float, d: int) -> tuple[FloatArray, FloatArray]:
+    return cv_transition(dt, d), cv_noise(dt, q, d)
+
+
+def cv_matrices(dt: ArrayLike, q: float, d: int = 2) -> tuple[FloatArray, FloatArray]:
+    """CV ``(F, Q)`` for intervals ``dt (B,)``: one cached ``(2d, 2d)`` pair when every
+    interval is the same (radar scans repeat one ``dt``; the arrays are shared, do not
+    modify them), else ``(B, 2d, 2d)`` stacks."""
+    t = np.asarray(dt, dtype=float)
+    if t.size and np.all(t == t.flat[0]):
+        return _cv_pair(float(t.flat[0]), float(q), d)
+    return cv_transition(t, d), cv_noise(t, q, d)
 
 
 def cv_noise_discrete(dt: ArrayLike, sigma_a: ArrayLike, d: int = 2) -> FloatArray:
@@ -205,6 +227,65 @@ def ct_noise(dt: ArrayLike, q: ArrayLike, q_omega: ArrayLike, d: int = 2) -> Flo
     Q[..., : 2 * d, : 2 * d] = Qcv
     Q[..., -1, -1] = np.asarray(q_omega, dtype=float) * t
     return Q
+
+
+@njit(cache=True)
+def _ct_predict_core(x, P, T, q, q_omega, xo, Po):  # pragma: no cover - compiled
+    """Coordinated-turn EKF prediction of one state: ``xo = f(x)``, ``Po = F P F^T + Q``
+    (the maths of :func:`ct_transition`, :func:`ct_jacobian`, :func:`ct_noise`)."""
+    n = x.shape[0]
+    d = (n - 1) // 2
+    ivx, ivy, iw = d, d + 1, n - 1
+    w, vx, vy = x[iw], x[ivx], x[ivy]
+    wt = w * T
+    s, c = math.sin(wt), math.cos(wt)
+    if abs(wt) < _SMALL:
+        a = T - w**2 * T**3 / 6 + w**4 * T**5 / 120
+        b = w * T**2 / 2 - w**3 * T**4 / 24
+        da = -w * T**3 / 3 + w**3 * T**5 / 30
+        db = T**2 / 2 - w**2 * T**4 / 8 + w**4 * T**6 / 144
+    else:
+        a, b = s / w, (1 - c) / w
+        da, db = T * c / w - s / w**2, T * s / w - (1 - c) / w**2
+    for i in range(n):
+        xo[i] = x[i]
+    xo[0] = x[0] + a * vx + b * vy
+    xo[1] = x[1] - b * vx + a * vy
+    xo[ivx] = c * vx + s * vy
+    xo[ivy] = -s * vx + c * vy
+    F = np.eye(n)
+    F[0, ivx], F[0, ivy], F[0, iw] = a, b, da * vx + db * vy
+    F[1, ivx], F[1, ivy], F[1, iw] = -b, a, -db * vx + da * vy
+    F[ivx, ivx], F[ivx, ivy], F[ivx, iw] = c, s, T * (-s * vx + c * vy)
+    F[ivy, ivx], F[ivy, ivy], F[ivy, iw] = -s, c, T * (-c * vx - s * vy)
+    if d == 3:
+        xo[2] = x[2] + T * x[5]
+        F[2, 5] = T
+    Q = np.zeros((n, n))
+    for k in range(d):
+        Q[k, k] = q * T**3 / 3
+        Q[k, k + d] = Q[k + d, k] = q * T**2 / 2
+        Q[k + d, k + d] = q * T
+    Q[iw, iw] = q_omega * T
+    cov_core(P, F, Q, Po)
+
+
+@guvectorize(
+    ["void(f8[:], f8[:,:], f8, f8, f8, f8[:], f8[:,:])"],
+    "(n),(n,n),(),(),()->(n),(n,n)",
+    nopython=True,
+    cache=True,
+)
+def _ct_predict_kernel(x, P, T, q, q_omega, xo, Po):  # pragma: no cover - compiled
+    _ct_predict_core(x, P, T, q, q_omega, xo, Po)
+
+
+def ct_predict(
+    x: ArrayLike, P: ArrayLike, dt: ArrayLike, q: float, q_omega: float
+) -> tuple[FloatArray, FloatArray]:
+    """Compiled coordinated-turn EKF prediction over leading dimensions: ``(f(x), F P F^T +
+    Q)`` with ``F`` = :func:`ct_jacobian` and ``Q`` = :func:`ct_noise`."""
+    return _ct_predict_kernel(x, P, dt, q, q_omega)  # type: ignore[no-any-return]
 
 
 # ---------------------------------------------------------------------------
@@ -348,3 +429,7 @@ class CoordinatedTurn:
 
     def noise(self, dt: ArrayLike) -> FloatArray:
         return ct_noise(dt, self.q, self.q_omega, self.d)
+
+    def predict(self, x: ArrayLike, P: ArrayLike, dt: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """EKF prediction of ``(x, P)`` over ``dt`` in one compiled call (:func:`ct_predict`)."""
+        return ct_predict(x, P, dt, self.q, self.q_omega)

@@ -21,7 +21,12 @@ derived rows (the patent's G13 has a sign slip):
 Two interchangeable filters take the same calls: :class:`KalmanNav` (covariance form,
 Joseph update through :mod:`seatrack.kalman`) and :class:`SRIFNav` (square-root information
 form: ``[R | zeta]`` re-triangularised by Householder QR for both the time and measurement
-updates). Given the same data they give the same estimate to round-off.
+updates). Given the same data they give the same estimate to round-off. Both follow the
+state contract of :mod:`seatrack.filters.base`: configuration in the object, the state
+(:class:`~seatrack.filters.base.TrackState`, a batch of one ship) in and out of
+``initiate``, ``predict(state, t)`` and ``update(state, y, H, R)`` -- the update takes a
+linearised measurement (innovation, rows, noise), because the navigation measurements
+(landmark echoes, gyro, GNSS, log, compass) are not target plots.
 """
 
 from __future__ import annotations
@@ -33,13 +38,15 @@ import numpy as np
 import scipy.linalg
 from numpy.typing import ArrayLike, NDArray
 
+from seatrack.filters.base import TrackState, finish_update, predicted
 from seatrack.geometry import bearing, wrap_pi
-from seatrack.kalman import extended_predict, extended_update
+from seatrack.kalman import extended_predict, extended_update, nis_log_likelihood
 
 FloatArray = NDArray[np.float64]
 
 __all__ = [
     "NX",
+    "STATE_NAMES",
     "ProcessNoise",
     "antenna_position",
     "landmark_geometry",
@@ -59,6 +66,8 @@ __all__ = [
 ]
 
 NX = 6  #: state size
+#: component names of the navigation state (positions first, as everywhere in seatrack)
+STATE_NAMES = ("x", "y", "heading", "vx", "vy", "turn_rate")
 
 
 @dataclass(frozen=True)
@@ -228,17 +237,21 @@ def compass_row() -> FloatArray:
 # Filters
 # ---------------------------------------------------------------------------
 class NavFilter(Protocol):
-    """Common interface of :class:`KalmanNav` and :class:`SRIFNav`."""
+    """Common interface of :class:`KalmanNav` and :class:`SRIFNav`: the state contract of
+    :mod:`seatrack.filters.base` (:class:`TrackState`, ``initiate``, ``predict(state, t)``)
+    with an update that takes a *linearised measurement* -- the innovation ``y``, its rows
+    ``H`` and noise ``R`` -- rather than target plots: landmark echoes, gyro, GNSS, log and
+    compass each linearise their own measurement (:func:`point_measurement`, ...).
+    The navigation state is one ship: a batch of one track.
+    """
 
-    @property
-    def x(self) -> FloatArray: ...
+    state_names: tuple[str, ...]
 
-    @property
-    def P(self) -> FloatArray: ...
+    def initiate(self, t: float, x: ArrayLike, P: ArrayLike) -> TrackState: ...
 
-    def predict(self, dt: float) -> None: ...
+    def predict(self, state: TrackState, t: float) -> TrackState: ...
 
-    def update(self, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> None: ...
+    def update(self, state: TrackState, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> TrackState: ...
 
 
 def _tri_inv(T: NDArray[Any], lower: bool) -> FloatArray:
@@ -257,46 +270,54 @@ def _tri_solve(R: NDArray[Any], b: NDArray[Any]) -> FloatArray:
     return np.asarray(x)
 
 
+def _measurement(
+    y: ArrayLike, H: ArrayLike, R: ArrayLike
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    return (
+        np.atleast_1d(np.asarray(y, float)),
+        np.atleast_2d(np.asarray(H, float)),
+        np.atleast_2d(np.asarray(R, float)),
+    )
+
+
 class KalmanNav:
     """Extended Kalman filter in covariance form (Joseph update via :mod:`seatrack.kalman`).
 
     Parameters
     ----------
-    x0 : (6,) initial state.
-    P0 : (6, 6) initial covariance.
     noise : ProcessNoise
     """
 
-    def __init__(self, x0: ArrayLike, P0: ArrayLike, noise: ProcessNoise | None = None) -> None:
-        self._x = np.array(x0, float)
-        self._P = np.array(P0, float)
+    state_names: tuple[str, ...] = STATE_NAMES
+
+    def __init__(self, noise: ProcessNoise | None = None) -> None:
         self.noise = noise or ProcessNoise()
 
-    @property
-    def x(self) -> FloatArray:
-        return self._x
+    def initiate(self, t: float, x: ArrayLike, P: ArrayLike) -> TrackState:
+        """The state at ``t`` from mean ``x (6,)`` and covariance ``P (6, 6)``."""
+        return TrackState.new([t], np.asarray(x, float)[None], np.asarray(P, float)[None])
 
-    @property
-    def P(self) -> FloatArray:
-        return self._P
-
-    def predict(self, dt: float) -> None:
-        """Spec prediction ``x <- f(x)``, ``A <- F A F^T + B``."""
+    def predict(self, state: TrackState, t: float) -> TrackState:
+        """Spec prediction to ``t``: ``x <- f(x)``, ``A <- F A F^T + B`` (no change when
+        ``t`` is not later than the state)."""
+        dt = float(t) - float(state.t[0])
         if dt <= 0:
-            return
-        fx, F = nav_transition(self._x, dt)
-        self._x, self._P = extended_predict(fx, self._P, F, nav_noise(dt, self.noise))
+            return state
+        fx, F = nav_transition(state.x[0], dt)
+        x, P = extended_predict(fx, state.P[0], F, nav_noise(dt, self.noise))
+        return predicted(state, np.array([float(t)]), x[None], P[None])
 
-    def update(self, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> None:
-        """Update with the linearised innovation ``y = z - h(x)`` (m,).
-
-        ``H`` (m, 6) are the measurement rows and ``R`` (m, m) the noise covariance.
-        """
-        yy = np.atleast_1d(np.asarray(y, float))
-        HH = np.atleast_2d(np.asarray(H, float))
-        RR = np.atleast_2d(np.asarray(R, float))
-        res = extended_update(self._x, self._P, yy, np.zeros_like(yy), HH, RR)
-        self._x, self._P = res.x, res.P
+    def update(self, state: TrackState, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> TrackState:
+        """Update with the linearised innovation ``y = z - h(x)`` (m,), rows ``H`` (m, 6)
+        and noise ``R`` (m, m). A measurement whose innovation covariance is not positive
+        definite, or that would give a non-finite state, is rejected (status REJECTED)."""
+        yy, HH, RR = _measurement(y, H, R)
+        x = state.x[0]
+        res = extended_update(x, state.P[0], yy, np.zeros_like(yy), HH, RR, check=False)
+        return finish_update(
+            state, res.x[None], res.P[None], np.atleast_1d(res.nis),
+            np.atleast_1d(res.log_likelihood), state.t,
+        )  # fmt: skip
 
 
 class SRIFNav:
@@ -307,50 +328,63 @@ class SRIFNav:
     re-triangularised by Householder QR; the lower-right block is the new ``[R | zeta]``.
     Measurement update: append the whitened rows ``[W_R H | W_R (y + H x)]`` to
     ``[R | zeta]`` and re-triangularise (spec "Update"; Bierman 1977, ch. V-VI).
+    ``TrackState.aux`` holds ``R (1, 6, 6)`` and ``zeta (1, 6)``; ``x`` and ``P`` are
+    derived from them.
     """
 
-    def __init__(self, x0: ArrayLike, P0: ArrayLike, noise: ProcessNoise | None = None) -> None:
+    state_names: tuple[str, ...] = STATE_NAMES
+
+    def __init__(self, noise: ProcessNoise | None = None) -> None:
         self.noise = noise or ProcessNoise()
-        L = np.linalg.cholesky(np.asarray(P0, float))
-        R0 = _tri_inv(L, lower=True)
-        self._triangularise(np.column_stack([R0, R0 @ np.asarray(x0, float)]))
 
-    def _triangularise(self, A: FloatArray) -> None:
-        T = np.asarray(np.linalg.qr(A, mode="r"), dtype=np.float64)
-        self.R = np.asarray(T[:NX, :NX])
-        self.zeta = np.asarray(T[:NX, NX])
-        self._x = _tri_solve(self.R, self.zeta)
-
-    @property
-    def x(self) -> FloatArray:
-        return self._x
-
-    @property
-    def P(self) -> FloatArray:
-        Ri = _tri_inv(self.R, lower=False)
+    @staticmethod
+    def _state(t: FloatArray, Rm: FloatArray, zeta: FloatArray, prior: TrackState | None) -> Any:
+        x = _tri_solve(Rm, zeta)
+        Ri = _tri_inv(Rm, lower=False)
         P = Ri @ Ri.T
-        return np.asarray(0.5 * (P + P.T))
+        P = 0.5 * (P + P.T)
+        aux = {"R": Rm[None], "zeta": zeta[None]}
+        if prior is None:
+            return TrackState.new(t, x[None], P[None], aux)
+        return x, P, aux
 
-    def predict(self, dt: float) -> None:
+    def initiate(self, t: float, x: ArrayLike, P: ArrayLike) -> TrackState:
+        L = np.linalg.cholesky(np.asarray(P, float))
+        R0 = _tri_inv(L, lower=True)
+        T = _qr_r(np.column_stack([R0, R0 @ np.asarray(x, float)]))
+        return self._state(np.array([float(t)]), T[:NX, :NX], T[:NX, NX], None)  # type: ignore[no-any-return]
+
+    def predict(self, state: TrackState, t: float) -> TrackState:
+        dt = float(t) - float(state.t[0])
         if dt <= 0:
-            return
-        fx, F = nav_transition(self._x, dt)
+            return state
+        Rm, zeta, x0 = state.aux["R"][0], state.aux["zeta"][0], state.x[0]
+        fx, F = nav_transition(x0, dt)
         Lq = np.linalg.cholesky(nav_noise(dt, self.noise))
         W = _tri_inv(Lq, lower=True)
-        u = fx - F @ self._x
+        u = fx - F @ x0
         top = np.column_stack([-W @ F, W, W @ u])
-        bot = np.column_stack([self.R, np.zeros((NX, NX)), self.zeta])
-        T = np.asarray(np.linalg.qr(np.vstack([top, bot]), mode="r"), dtype=np.float64)
-        self.R = np.asarray(T[NX : 2 * NX, NX : 2 * NX])
-        self.zeta = np.asarray(T[NX : 2 * NX, 2 * NX])
-        self._x = _tri_solve(self.R, self.zeta)
+        bot = np.column_stack([Rm, np.zeros((NX, NX)), zeta])
+        T = _qr_r(np.vstack([top, bot]))
+        x, P, aux = self._state(state.t, T[NX : 2 * NX, NX : 2 * NX], T[NX : 2 * NX, 2 * NX], state)
+        return predicted(state, np.array([float(t)]), x[None], P[None], aux)
 
-    def update(self, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> None:
-        yy = np.atleast_1d(np.asarray(y, float))
-        HH = np.atleast_2d(np.asarray(H, float))
-        Lr = np.linalg.cholesky(np.atleast_2d(np.asarray(R, float)))
-        Wr = _tri_inv(Lr, lower=True)
-        Hw = Wr @ HH
-        zw = Wr @ (yy + HH @ self._x)
-        A = np.vstack([np.column_stack([self.R, self.zeta]), np.column_stack([Hw, zw])])
-        self._triangularise(A)
+    def update(self, state: TrackState, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> TrackState:
+        yy, HH, RR = _measurement(y, H, R)
+        Rm, zeta, x0 = state.aux["R"][0], state.aux["zeta"][0], state.x[0]
+        try:
+            nis, ll = nis_log_likelihood(yy, HH @ state.P[0] @ HH.T + RR)
+            Wr = _tri_inv(np.linalg.cholesky(RR), lower=True)
+            rows = np.column_stack([Wr @ HH, Wr @ (yy + HH @ x0)])
+            T = _qr_r(np.vstack([np.column_stack([Rm, zeta]), rows]))
+            x, P, aux = self._state(state.t, T[:NX, :NX], T[:NX, NX], state)
+        except np.linalg.LinAlgError:  # an unusable measurement: rejected below
+            x, P, aux, nis, ll = x0, state.P[0], {}, np.nan, np.nan
+        return finish_update(
+            state, x[None], P[None], np.atleast_1d(nis), np.atleast_1d(ll), state.t, aux
+        )
+
+
+def _qr_r(A: FloatArray) -> FloatArray:
+    """The triangular factor of a Householder QR."""
+    return np.asarray(np.linalg.qr(A, mode="r"), dtype=np.float64)

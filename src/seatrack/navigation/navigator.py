@@ -227,6 +227,234 @@ def _per_tick(ticks: NDArray[Any], t: NDArray[Any]) -> NDArray[np.int64]:
     return np.searchsorted(ticks, t, side="left").astype(np.int64)
 
 
+@dataclass(frozen=True)
+class _Sweep:
+    """The echo log sorted by unwrapped antenna angle, and the antenna timing."""
+
+    start: float
+    phi0: float
+    period: float
+    Phi: FloatArray  # sorted unwrapped antenna angles
+    range: FloatArray
+    antenna: FloatArray
+
+    @classmethod
+    def of(cls, echoes: Echoes, start: float, cfg: NavigatorConfig) -> _Sweep:
+        et = np.asarray(echoes.t, float)
+        ang = np.asarray(echoes.antenna, float)
+        T = cfg.antenna_period
+        phi0, Phi = _antenna_unwrap(et, ang, T, start, cfg.phase_tolerance, echoes)
+        order = np.argsort(Phi, kind="stable")
+        rng = np.asarray(echoes.range, float)
+        return cls(start, phi0, T, Phi[order], rng[order], ang[order])
+
+    def Phi_of(self, t: float) -> float:
+        return TWO_PI * (t - self.start) / self.period + self.phi0
+
+    def t_of(self, P: float) -> float:
+        return self.start + (P - self.phi0) * self.period / TWO_PI
+
+    def rel_rate(self, x: FloatArray) -> float:
+        """Antenna angle (relative to the bow) turned per radian of true bearing."""
+        omega = TWO_PI / self.period
+        return omega / max(omega + float(x[5]), 0.5 * omega)
+
+
+@dataclass(frozen=True)
+class _Gate:
+    """A landmark's measurement rows, innovation covariance and echo gate at a state."""
+
+    H: FloatArray
+    S: FloatArray
+    half: float  # half angle of the gate, rad
+    proj: FloatArray | None  # contour: projection of (dr, dtheta) on the normal
+    w_half: FloatArray
+    clutter: float
+    dirs: FloatArray  # world directions of the measurement components (survey)
+
+
+def _gate(lm: LandmarkMap, j: int, x: FloatArray, P: FloatArray, cfg: NavigatorConfig) -> _Gate:
+    gc, a = cfg.gate, cfg.antenna_offset
+    r_c, th_c, _ = landmark_geometry(x, lm.xy[j], a)
+    var_r = gc.sigma_range**2
+    var_t = (r_c * gc.sigma_angle) ** 2
+    if not lm.is_contour[j]:
+        H = point_rows(x, lm.xy[j], a)
+        S = H @ P @ H.T + np.diag([var_r, var_t])
+        half = adaptive_half_angle(r_c, S, [0.0, 1.0], gc)
+        dirs = np.array([[np.sin(th_c), np.cos(th_c)], [np.cos(th_c), -np.sin(th_c)]])
+        w_half = np.array([gc.range_half_width, r_c * half])
+        return _Gate(H, S, half, None, w_half, gc.clutter_density, dirs)
+    b_j = float(lm.normal[j])
+    c, s = np.cos(th_c - b_j), np.sin(th_c - b_j)
+    H = contour_row(x, lm.xy[j], b_j, a)[None, :]
+    S = H @ P @ H.T + (c * c * var_r + s * s * var_t)
+    half = adaptive_half_angle(r_c, S, [-s], gc)
+    seg = min(
+        2 * r_c * gc.max_half_angle / max(abs(s), 1e-6),
+        2 * gc.range_half_width / max(abs(c), 1e-6),
+    )
+    w_half = np.array([abs(c) * gc.range_half_width + abs(s) * r_c * half])
+    dirs = np.array([[np.sin(b_j), np.cos(b_j)]])
+    return _Gate(H, S, half, np.array([c, -s]), w_half, gc.clutter_density * seg, dirs)
+
+
+def _aux_per_tick(
+    ticks: FloatArray, aux: AuxData | None
+) -> dict[str, tuple[NDArray[np.int64], FloatArray]]:
+    """Per optional sensor: index of its last sample in each tick (-1: none), values."""
+    out: dict[str, tuple[NDArray[np.int64], FloatArray]] = {}
+    if aux is None:
+        return out
+    for name in ("gnss", "log", "compass"):
+        v = getattr(aux, name)
+        if v is not None:
+            at = np.asarray(v[0], float)
+            kk = _per_tick(ticks, at)
+            last = np.full(ticks.size + 1, -1, np.int64)
+            np.maximum.at(last, kk, np.arange(at.size))  # the last sample in each tick
+            out[name] = (last, np.asarray(v[1], float))
+    return out
+
+
+class _Passage:
+    """The mutable state of one passage (filter state, active window, armed landmark,
+    counters, survey records) and the steps of the navigation loop."""
+
+    def __init__(
+        self, lm: LandmarkMap, sweep: _Sweep, cfg: NavigatorConfig, flt: NavFilter, state: Any
+    ) -> None:
+        self.lm, self.sweep, self.cfg, self.flt, self.state = lm, sweep, cfg, flt, state
+        self.t = sweep.start
+        N = len(lm)
+        self.jump = np.zeros(N, np.int64)
+        self.attempts = np.zeros(N, np.int64)
+        self.hits = np.zeros(N, np.int64)
+        self.records: list[tuple[int, float, FloatArray, float, float]] = []
+        self.n_updates = 0
+        self.armed, self.armed_Phi = -1, 0.0
+        self.window = settle_window(Window(0, -1), self.visible(self.x))
+
+    @property
+    def x(self) -> FloatArray:
+        return np.asarray(self.state.x[0])
+
+    def advance(self, t: float) -> None:
+        """Predict to ``t`` (no change unless later than the current time)."""
+        if t > self.t:
+            self.state = self.flt.predict(self.state, t)
+            self.t = t
+
+    def update(self, y: ArrayLike, H: ArrayLike, R: ArrayLike) -> None:
+        self.state = self.flt.update(self.state, y, H, R)
+
+    def visible(self, x: FloatArray) -> NDArray[np.bool_]:
+        return in_range(
+            self.lm.xy, antenna_position(x, self.cfg.antenna_offset), self.cfg.range_limit
+        )
+
+    def eligible(self, x: FloatArray) -> NDArray[np.bool_]:
+        m = np.zeros(len(self.lm), bool)
+        idx = self.window.indices()
+        m[idx[(idx >= 0) & (idx < len(self.lm))]] = True
+        return m & self.visible(x)
+
+    def bearings(self, x: FloatArray) -> FloatArray:
+        e = antenna_position(x, self.cfg.antenna_offset)
+        xy = self.lm.xy
+        return np.asarray(bearing(xy[:, 0] - e[0], xy[:, 1] - e[1]))
+
+    def serve(self, j: int, Phi_plan: float, t_g: float) -> None:
+        """Take the echoes in landmark ``j``'s gate and update (spec "Gating")."""
+        gc, sw = self.cfg.gate, self.sweep
+        x, P = self.x, self.state.P[0]
+        r_c, th_c, phi_c = landmark_geometry(x, self.lm.xy[j], self.cfg.antenna_offset)
+        Pc = Phi_plan + float(wrap_pi(phi_c - Phi_plan))
+        self.attempts[j] += 1
+        g = _gate(self.lm, j, x, P, self.cfg)
+        i0 = int(np.searchsorted(sw.Phi, Pc - g.half, side="left"))
+        i1 = int(np.searchsorted(sw.Phi, Pc + g.half, side="right"))
+        rr = sw.range[i0:i1]
+        inr = np.abs(rr - r_c) <= gc.range_half_width
+        if not inr.any():
+            return
+        off = local_offsets(
+            rr[inr], sw.antenna[i0:i1][inr], r_c, th_c, phi_c, x[2], gc.polar_offsets
+        )
+        z = off if g.proj is None else (off @ g.proj)[:, None]
+        p = echo_weights(z, g.S, g.clutter, gc.expected_echoes)
+        st = weighted_measurement(z, p, g.w_half, gc)
+        if not st.updated:
+            return
+        self.update(st.z, g.H, np.diag(st.var + self.cfg.map_sigma**2))
+        self.hits[j] += 1
+        self.n_updates += 1
+        for k in range(st.z.size):  # survey: measurement noise only
+            self.records.append((j, t_g, g.dirs[k], float(st.z[k]), float(st.var[k])))
+
+    def serve_swept(self, tk: float, pad: float) -> None:
+        """Serve every armed gate the antenna has fully swept by ``tk``, arming the next."""
+        sw = self.sweep
+        while self.armed >= 0 and sw.t_of(self.armed_Phi + pad) <= tk:
+            self.advance(max(sw.t_of(self.armed_Phi), self.t))
+            # the gate centre at the predicted state (the plan assumed a constant turn rate)
+            _, _, phi_c = landmark_geometry(self.x, self.lm.xy[self.armed], self.cfg.antenna_offset)
+            Pc = self.armed_Phi + float(wrap_pi(phi_c - self.armed_Phi))
+            self.advance(sw.t_of(Pc))
+            self.serve(self.armed, Pc, self.t)
+            x = self.x
+            ch = next_landmark(
+                self.bearings(x), self.eligible(x), self.jump, self.armed, 0.0, self.cfg.schedule
+            )
+            self.jump = ch.jump
+            if ch.index < 0:
+                self.armed = -1
+            else:
+                self.armed, self.armed_Phi = ch.index, Pc + ch.gap * sw.rel_rate(x)
+
+    def arm(self, tk: float) -> None:
+        """Arm the next landmark when none is armed."""
+        if self.armed >= 0:
+            return
+        x = self.x
+        ant = self.sweep.Phi_of(tk)
+        sc = self.cfg.schedule
+        ch = next_landmark(self.bearings(x), self.eligible(x), self.jump, None, ant + x[2], sc)
+        self.jump = ch.jump
+        if ch.index >= 0:
+            self.armed = ch.index
+            self.armed_Phi = ant + (sc.start_margin + ch.gap) * self.sweep.rel_rate(x)
+
+    def fuse(self, k: int, gyro: Any, aux: dict[str, tuple[NDArray[np.int64], FloatArray]]) -> None:
+        """Gyro, GNSS, log and compass samples of tick ``k``."""
+        cfg = self.cfg
+        if gyro is not None and gyro[1][k] > 0:
+            g_sum, g_cnt = gyro
+            y = [g_sum[k] / g_cnt[k] - self.x[5]]
+            self.update(y, gyro_row()[None, :], [[cfg.gyro_sigma**2 / g_cnt[k]]])
+        if "gnss" in aux and aux["gnss"][0][k] >= 0:
+            zi = aux["gnss"][1][aux["gnss"][0][k]]
+            self.update(zi - self.x[:2], gnss_rows(), np.eye(2) * cfg.gnss_sigma**2)
+        if "log" in aux and aux["log"][0][k] >= 0:
+            zi = aux["log"][1][aux["log"][0][k]]
+            hx, h = log_speed(self.x)
+            self.update([zi - hx], h[None, :], [[cfg.log_sigma**2]])
+        if "compass" in aux and aux["compass"][0][k] >= 0:
+            zi = aux["compass"][1][aux["compass"][0][k]]
+            y = [wrap_pi(zi - self.x[2])]
+            self.update(y, compass_row()[None, :], [[cfg.compass_sigma**2]])
+
+    def survey_records(self) -> SurveyRecords:
+        r = self.records
+        return SurveyRecords(
+            np.array([v[0] for v in r], np.int64),
+            np.array([v[1] for v in r], float),
+            np.array([v[2] for v in r], float).reshape(-1, 2),
+            np.array([v[3] for v in r], float),
+            np.array([v[4] for v in r], float),
+        )
+
+
 def navigate(
     landmarks: LandmarkMap,
     echoes: Echoes,
@@ -252,201 +480,39 @@ def navigate(
     NavResult
     """
     cfg = config or NavigatorConfig()
-    gc = cfg.gate
-    a = cfg.antenna_offset
-    T = cfg.antenna_period
     et = np.asarray(echoes.t, float)
     if et.size == 0:
         raise ValueError("the echo log is empty")
     start = float(et[0] if t0 is None else t0)
-    phi0, Phi = _antenna_unwrap(
-        et, np.asarray(echoes.antenna, float), T, start, cfg.phase_tolerance, echoes
-    )
-    order = np.argsort(Phi, kind="stable")
-    Phi_s = Phi[order]
-    r_s = np.asarray(echoes.range, float)[order]
-    ang_s = np.asarray(echoes.antenna, float)[order]
-
-    def Phi_of(t: float) -> float:
-        return TWO_PI * (t - start) / T + phi0
-
-    def t_of(P: float) -> float:
-        return start + (P - phi0) * T / TWO_PI
-
+    sweep = _Sweep.of(echoes, start, cfg)
     P0 = np.diag(np.asarray(cfg.init_std, float) ** 2)
     noise = cfg.noise if gyro is not None else replace(cfg.noise, q_turn=cfg.q_turn_without_gyro)
-    filt: NavFilter = (KalmanNav if cfg.method == "ekf" else SRIFNav)(x0, P0, noise)
-    dt = T / cfg.steps_per_rev
+    flt: NavFilter = (KalmanNav if cfg.method == "ekf" else SRIFNav)(noise)
+    dt = cfg.antenna_period / cfg.steps_per_rev
     n_ticks = _tick_count(et, start, dt, echoes)
     ticks = np.asarray(start + dt * np.arange(1, n_ticks + 1), dtype=np.float64)
-
-    g_k = g_sum = g_cnt = None
+    g = None
     if gyro is not None:
         gt, gw = (np.asarray(v, float) for v in gyro)
         g_k = _per_tick(ticks, gt)
-        g_sum = np.bincount(g_k, gw, minlength=n_ticks + 1)
-        g_cnt = np.bincount(g_k, minlength=n_ticks + 1)
-    aux_last: dict[str, tuple[NDArray[np.int64], FloatArray]] = {}
-    if aux is not None:
-        for name in ("gnss", "log", "compass"):
-            v = getattr(aux, name)
-            if v is not None:
-                at = np.asarray(v[0], float)
-                kk = _per_tick(ticks, at)
-                last = np.full(n_ticks + 1, -1, np.int64)
-                np.maximum.at(last, kk, np.arange(at.size))  # the last sample in each tick
-                aux_last[name] = (last, np.asarray(v[1], float))
-
-    N = len(landmarks)
-    xy = landmarks.xy
-    beta = landmarks.normal
-    jump = np.zeros(N, np.int64)
-    attempts = np.zeros(N, np.int64)
-    hits = np.zeros(N, np.int64)
-    rec_l: list[int] = []
-    rec_t: list[float] = []
-    rec_d: list[FloatArray] = []
-    rec_z: list[float] = []
-    rec_v: list[float] = []
-    n_updates = 0
-
-    def visible(x: FloatArray) -> NDArray[np.bool_]:
-        return in_range(xy, antenna_position(x, a), cfg.range_limit)
-
-    window = settle_window(Window(0, -1), visible(filt.x))
-
-    def eligible(x: FloatArray) -> NDArray[np.bool_]:
-        m = np.zeros(N, bool)
-        idx = window.indices()
-        m[idx[(idx >= 0) & (idx < N)]] = True
-        return m & visible(x)
-
-    def bearings(x: FloatArray) -> FloatArray:
-        e = antenna_position(x, a)
-        return np.asarray(bearing(xy[:, 0] - e[0], xy[:, 1] - e[1]))
-
-    def rel_rate(x: FloatArray) -> float:
-        """Antenna angle (relative to the bow) turned per radian of true bearing."""
-        omega = TWO_PI / T
-        return omega / max(omega + float(x[5]), 0.5 * omega)
-
-    def serve(j: int, Phi_plan: float, t_g: float) -> None:
-        nonlocal n_updates
-        x, P = filt.x, filt.P
-        r_c, th_c, phi_c = landmark_geometry(x, xy[j], a)
-        Pc = Phi_plan + float(wrap_pi(phi_c - Phi_plan))
-        attempts[j] += 1
-        var_r = gc.sigma_range**2
-        var_t = (r_c * gc.sigma_angle) ** 2
-        if landmarks.is_contour[j]:
-            b_j = float(beta[j])
-            c, s = np.cos(th_c - b_j), np.sin(th_c - b_j)
-            H = contour_row(x, xy[j], b_j, a)[None, :]
-            S = H @ P @ H.T + (c * c * var_r + s * s * var_t)
-            half = adaptive_half_angle(r_c, S, [-s], gc)
-            proj = np.array([c, -s])
-            w_half = np.array([abs(c) * gc.range_half_width + abs(s) * r_c * half])
-            seg = min(
-                2 * r_c * gc.max_half_angle / max(abs(s), 1e-6),
-                2 * gc.range_half_width / max(abs(c), 1e-6),
-            )
-            b = gc.clutter_density * seg
-            dirs = np.array([[np.sin(b_j), np.cos(b_j)]])
-        else:
-            H = point_rows(x, xy[j], a)
-            S = H @ P @ H.T + np.diag([var_r, var_t])
-            half = adaptive_half_angle(r_c, S, [0.0, 1.0], gc)
-            proj = None
-            w_half = np.array([gc.range_half_width, r_c * half])
-            b = gc.clutter_density
-            dirs = np.array([[np.sin(th_c), np.cos(th_c)], [np.cos(th_c), -np.sin(th_c)]])
-        i0 = int(np.searchsorted(Phi_s, Pc - half, side="left"))
-        i1 = int(np.searchsorted(Phi_s, Pc + half, side="right"))
-        rr = r_s[i0:i1]
-        inr = np.abs(rr - r_c) <= gc.range_half_width
-        if not inr.any():
-            return
-        off = local_offsets(rr[inr], ang_s[i0:i1][inr], r_c, th_c, phi_c, x[2], gc.polar_offsets)
-        z = off if proj is None else (off @ proj)[:, None]
-        p = echo_weights(z, S, b, gc.expected_echoes)
-        st = weighted_measurement(z, p, w_half, gc)
-        if not st.updated:
-            return
-        filt.update(st.z, H, np.diag(st.var + cfg.map_sigma**2))
-        hits[j] += 1
-        n_updates += 1
-        for k in range(st.z.size):
-            rec_l.append(j)
-            rec_t.append(t_g)
-            rec_d.append(dirs[k])
-            rec_z.append(float(st.z[k]))
-            rec_v.append(float(st.var[k]))  # survey: measurement noise only
-
-    t_f = start
-    armed = -1
-    armed_Phi = 0.0
+        g = (np.bincount(g_k, gw, minlength=n_ticks + 1), np.bincount(g_k, minlength=n_ticks + 1))
+    aux_last = _aux_per_tick(ticks, aux)
+    run = _Passage(landmarks, sweep, cfg, flt, flt.initiate(start, x0, P0))
     out_x = np.empty((n_ticks, 6))
     out_s = np.empty((n_ticks, 6))
-    pad = gc.max_half_angle + np.radians(1.0)
-    last_rev = int(np.floor(Phi_of(start) / TWO_PI))
+    pad = cfg.gate.max_half_angle + np.radians(1.0)
+    last_rev = int(np.floor(sweep.Phi_of(start) / TWO_PI))
     for k in range(n_ticks):
         tk = float(ticks[k])
-        # serve every armed gate the antenna has fully swept by this tick
-        while armed >= 0 and t_of(armed_Phi + pad) <= tk:
-            t_g = max(t_of(armed_Phi), t_f)
-            filt.predict(t_g - t_f)
-            t_f = t_g
-            # the gate centre at the predicted state (the plan assumed a constant turn rate)
-            _, _, phi_c = landmark_geometry(filt.x, xy[armed], a)
-            Pc = armed_Phi + float(wrap_pi(phi_c - armed_Phi))
-            if t_of(Pc) > t_f:
-                filt.predict(t_of(Pc) - t_f)
-                t_f = t_of(Pc)
-            serve(armed, Pc, t_f)
-            x = filt.x
-            ch = next_landmark(bearings(x), eligible(x), jump, armed, 0.0, cfg.schedule)
-            jump = ch.jump
-            if ch.index < 0:
-                armed = -1
-            else:
-                armed, armed_Phi = ch.index, Pc + ch.gap * rel_rate(x)
-        filt.predict(tk - t_f)
-        t_f = tk
-        if g_sum is not None and g_cnt is not None and g_cnt[k] > 0:
-            filt.update(
-                [g_sum[k] / g_cnt[k] - filt.x[5]],
-                gyro_row()[None, :],
-                [[cfg.gyro_sigma**2 / g_cnt[k]]],
-            )
-        if "gnss" in aux_last and aux_last["gnss"][0][k] >= 0:
-            zi = aux_last["gnss"][1][aux_last["gnss"][0][k]]
-            filt.update(zi - filt.x[:2], gnss_rows(), np.eye(2) * cfg.gnss_sigma**2)
-        if "log" in aux_last and aux_last["log"][0][k] >= 0:
-            zi = aux_last["log"][1][aux_last["log"][0][k]]
-            hx, h = log_speed(filt.x)
-            filt.update([zi - hx], h[None, :], [[cfg.log_sigma**2]])
-        if "compass" in aux_last and aux_last["compass"][0][k] >= 0:
-            zi = aux_last["compass"][1][aux_last["compass"][0][k]]
-            filt.update([wrap_pi(zi - filt.x[2])], compass_row()[None, :], [[cfg.compass_sigma**2]])
-        rev = int(np.floor(Phi_of(tk) / TWO_PI))
+        run.serve_swept(tk, pad)
+        run.advance(tk)
+        run.fuse(k, g, aux_last)
+        rev = int(np.floor(sweep.Phi_of(tk) / TWO_PI))
         if rev != last_rev:
-            window = step_window(window, visible(filt.x))
+            run.window = step_window(run.window, run.visible(run.x))
             last_rev = rev
-        if armed < 0:
-            x = filt.x
-            ant = Phi_of(tk)
-            ch = next_landmark(bearings(x), eligible(x), jump, None, ant + x[2], cfg.schedule)
-            jump = ch.jump
-            if ch.index >= 0:
-                armed = ch.index
-                armed_Phi = ant + (cfg.schedule.start_margin + ch.gap) * rel_rate(x)
-        out_x[k] = filt.x
-        out_s[k] = np.sqrt(np.diag(filt.P))
-    records = SurveyRecords(
-        np.array(rec_l, np.int64),
-        np.array(rec_t, float),
-        np.array(rec_d, float).reshape(-1, 2),
-        np.array(rec_z, float),
-        np.array(rec_v, float),
-    )
-    return NavResult(ticks, out_x, out_s, attempts, hits, records, n_updates)
+        run.arm(tk)
+        out_x[k] = run.x
+        out_s[k] = np.sqrt(np.diag(run.state.P[0]))
+    records = run.survey_records()
+    return NavResult(ticks, out_x, out_s, run.attempts, run.hits, records, run.n_updates)

@@ -25,7 +25,7 @@ Everything is vectorised over (revolution, landmark) pairs and pulses; no loop p
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -180,42 +180,34 @@ def _interp_state(route: Trajectory, t: FloatArray) -> tuple[FloatArray, FloatAr
     return x, y, h
 
 
-def simulate_radar(
-    route: Trajectory,
-    landmarks: LandmarkMap,
-    rng: np.random.Generator,
-    radar: RadarConfig | None = None,
-    env: EchoEnvironment | None = None,
-    nav_map: LandmarkMap | None = None,
-) -> RadarRun:
-    """Simulate one passage (see module docstring).
-
-    Parameters
-    ----------
-    route : truth trajectory (heading = course).
-    landmarks : true landmark positions.
-    rng : random generator (all randomness comes from it).
-    radar, env : configuration.
-    nav_map : map for the navigator; default: ``landmarks`` plus ``env.map_error_std``
-        Gaussian errors per coordinate.
-    """
-    rc = radar or RadarConfig()
-    ev = env or EchoEnvironment()
-    T, a = rc.period, rc.antenna_offset
-    t0, t1 = float(route.t[0]), float(route.t[-1])
-    n_rev = int(np.floor((t1 - t0) / T))
-    L = landmarks.xy
-    nL = len(landmarks)
-    hb = 0.5 * rc.beam_width
+def _antenna(route: Trajectory, rc: RadarConfig) -> Callable[[FloatArray], tuple[FloatArray, ...]]:
+    """Antenna position East, North and own heading at times ``t`` (offset ``a`` aft)."""
+    a = rc.antenna_offset
 
     def antenna_pos(t: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         x, y, h = _interp_state(route, t)
         return x - a * np.sin(h), y - a * np.cos(h), h
 
-    def ant_angle(t: FloatArray) -> FloatArray:
-        return np.asarray(wrap_2pi(TWO_PI * (t - t0) / T))
+    return antenna_pos
 
-    # --- crossing time of every (revolution, landmark) pair: fixed-point iteration
+
+def _passes(
+    route: Trajectory,
+    landmarks: LandmarkMap,
+    rng: np.random.Generator,
+    rc: RadarConfig,
+    ev: EchoEnvironment,
+    antenna_pos: Callable[[FloatArray], tuple[FloatArray, ...]],
+) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Every beam pass over a landmark: the pulse numbers and the landmark of each pulse.
+
+    The crossing time of every (revolution, landmark) pair is found by fixed-point
+    iteration; a pass spans the beam width for a point reflector, the segment plus the beam
+    for a contour element. Passes are missed with probability ``env.p_miss``.
+    """
+    T, t0, t1 = rc.period, float(route.t[0]), float(route.t[-1])
+    n_rev = int(np.floor((t1 - t0) / T))
+    L, nL, hb = landmarks.xy, len(landmarks), 0.5 * rc.beam_width
     t_rev = t0 + T * np.arange(n_rev)[:, None] + np.zeros((1, nL))
     tc = t_rev + 0.5 * T
     for _ in range(4):
@@ -247,17 +239,30 @@ def simulate_radar(
     cnt = np.maximum(p_hi - p_lo + 1, 0)
     owner = np.repeat(np.arange(tcs.size), cnt)
     pulse = p_lo[owner] + (np.arange(owner.size) - np.repeat(np.cumsum(cnt) - cnt, cnt))
+    return pulse, lm_i[owner]
+
+
+def _landmark_echoes(
+    pulse: NDArray[np.int64],
+    lid: NDArray[np.int64],
+    landmarks: LandmarkMap,
+    rng: np.random.Generator,
+    rc: RadarConfig,
+    ev: EchoEnvironment,
+    t0: float,
+    antenna_pos: Callable[[FloatArray], tuple[FloatArray, ...]],
+) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+    """Pulse, range bin and landmark of every landmark echo sample: point reflectors inside
+    the beam, contour elements where the beam axis meets the segment at a usable incidence."""
+    L, hb = landmarks.xy, 0.5 * rc.beam_width
     tp = t0 + pulse / rc.prf
-    lid = lm_i[owner]
     ex, ey, h = antenna_pos(tp)
-    beam_dir = ant_angle(tp) + h  # true bearing of the beam axis
+    beam_dir = wrap_2pi(TWO_PI * (tp - t0) / rc.period) + h  # true bearing of the beam axis
     is_c = landmarks.is_contour[lid]
-    # point reflectors: inside the beam
     dx, dy = L[lid, 0] - ex, L[lid, 1] - ey
     r_true = np.hypot(dx, dy)
     keep = np.abs(wrap_pi(bearing(dx, dy) - beam_dir)) <= hb
     r_echo = r_true + ev.point_spread * rng.standard_normal(r_true.size)
-    # contour elements: intersection of the beam axis with the segment
     if is_c.any():
         ori = landmarks.orientation[lid]
         nx_, ny_ = np.cos(ori), -np.sin(ori)  # normal of the line
@@ -277,16 +282,25 @@ def simulate_radar(
     keep &= (r_echo > rc.min_range) & (r_echo < rc.range_limit)
     for h0, h1 in ev.hidden:
         keep &= ~((tp >= h0) & (tp <= h1))
-    lm_pulse = pulse[keep]
-    lm_bin = np.floor(r_echo[keep] / rc.bin_m).astype(np.int64)
-    lm_src = lid[keep]
-    # --- clutter: uniform in area, Poisson per revolution
+    return pulse[keep], np.floor(r_echo[keep] / rc.bin_m).astype(np.int64), lid[keep]
+
+
+def _echo_log(
+    landmark: tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]],
+    rng: np.random.Generator,
+    rc: RadarConfig,
+    ev: EchoEnvironment,
+    t0: float,
+    n_rev: int,
+) -> EchoLog:
+    """Landmark echoes plus uniform clutter (Poisson per revolution), one row per
+    (pulse, range bin) sample, sorted by time then range."""
+    lm_pulse, lm_bin, lm_src = landmark
     area = np.pi * (rc.range_limit**2 - rc.min_range**2)
     n_cl = int(rng.poisson(ev.clutter_density * area * n_rev))
     r_cl = np.sqrt(rng.uniform(rc.min_range**2, rc.range_limit**2, n_cl))
-    cl_pulse = rng.integers(0, int(n_rev * T * rc.prf), n_cl)
+    cl_pulse = rng.integers(0, int(n_rev * rc.period * rc.prf), n_cl)
     cl_bin = np.floor(r_cl / rc.bin_m).astype(np.int64)
-    # --- merge, one row per (pulse, bin) sample, sorted by time then range
     pulse_all = np.concatenate([lm_pulse, cl_pulse])
     bin_all = np.concatenate([lm_bin, cl_bin])
     src_all = np.concatenate([lm_src, np.full(n_cl, -1)])
@@ -296,13 +310,42 @@ def simulate_radar(
     key = pulse_all * (1 << 20) + bin_all
     _, first = np.unique(key, return_index=True)  # sorted by key = (pulse, bin)
     tt = t0 + pulse_all[first] / rc.prf
-    echoes = EchoLog(
+    return EchoLog(
         tt,
-        ant_angle(tt),
+        np.asarray(wrap_2pi(TWO_PI * (tt - t0) / rc.period)),
         (bin_all[first] + 0.5) * rc.bin_m,
         np.maximum(amp[first], 0.1),
         src_all[first],
     )
+
+
+def simulate_radar(
+    route: Trajectory,
+    landmarks: LandmarkMap,
+    rng: np.random.Generator,
+    radar: RadarConfig | None = None,
+    env: EchoEnvironment | None = None,
+    nav_map: LandmarkMap | None = None,
+) -> RadarRun:
+    """Simulate one passage (see module docstring).
+
+    Parameters
+    ----------
+    route : truth trajectory (heading = course).
+    landmarks : true landmark positions.
+    rng : random generator (all randomness comes from it).
+    radar, env : configuration.
+    nav_map : map for the navigator; default: ``landmarks`` plus ``env.map_error_std``
+        Gaussian errors per coordinate.
+    """
+    rc = radar or RadarConfig()
+    ev = env or EchoEnvironment()
+    t0, t1 = float(route.t[0]), float(route.t[-1])
+    n_rev = int(np.floor((t1 - t0) / rc.period))
+    antenna_pos = _antenna(route, rc)
+    pulse, lid = _passes(route, landmarks, rng, rc, ev, antenna_pos)
+    samples = _landmark_echoes(pulse, lid, landmarks, rng, rc, ev, t0, antenna_pos)
+    echoes = _echo_log(samples, rng, rc, ev, t0, n_rev)
     # --- gyro log
     gt = np.arange(t0, t1, 1.0 / ev.gyro_rate)
     w_true = np.interp(gt, route.t, route.turn_rate)
@@ -313,5 +356,6 @@ def simulate_radar(
         [route.pos[:, 0], route.pos[:, 1], hd, route.vel[:, 0], route.vel[:, 1], route.turn_rate]
     )
     if nav_map is None:
+        L = landmarks.xy
         nav_map = landmarks.with_xy(L + ev.map_error_std * rng.standard_normal(L.shape))
     return RadarRun(echoes, gt, gyro, route.t, truth, landmarks, nav_map)

@@ -6,14 +6,9 @@ import numpy as np
 import pytest
 
 from seatrack.geometry import enu_to_geodetic
+from seatrack.io.landmarks import decode_records, encode_records, read_map_csv, write_map_csv
 from seatrack.io.table import InputError
-from seatrack.navigation.landmarks import (
-    LandmarkMap,
-    decode_records,
-    encode_records,
-    read_map_csv,
-    write_map_csv,
-)
+from seatrack.navigation.landmarks import LandmarkMap
 
 
 def _map() -> LandmarkMap:

@@ -1,9 +1,12 @@
-"""Tests of seatrack.io.measurements_csv: simulated plots/bearings/truth to CSV and back."""
+"""Tests of seatrack.simulate.files: simulated plots/bearings/truth to CSV and back."""
 
 import numpy as np
 import pytest
 
-from seatrack.io.measurements_csv import (
+from seatrack.io.plots import read_plot_tracks
+from seatrack.io.table import InputError, read_csv_table
+from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.simulate.files import (
     BEARING_COLUMNS,
     plots_from_measurements,
     read_truth,
@@ -12,9 +15,6 @@ from seatrack.io.measurements_csv import (
     write_plots,
     write_truth,
 )
-from seatrack.io.plots import read_plots
-from seatrack.io.table import InputError, read_csv_table
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
 
 
 def _meas(components, sigma, seed=0, p_detect=0.8, start=(3000.0, 4000.0, 200.0), observer=None):
@@ -38,10 +38,10 @@ def test_plots_round_trip_2d_with_range_rate(tmp_path):
     p = tmp_path / "PLOTS.csv"
     n = write_plots(p, [("A", m1), ("B", m2)])
     assert n == m1.detected.sum() + m2.detected.sum()
-    tracks = read_plots(p)
-    assert [t.track for t in tracks] == ["A", "B"]
+    tracks = read_plot_tracks(p)
+    assert [t.label for t in tracks] == ["A", "B"]
     for t, m in zip(tracks, (m1, m2), strict=True):
-        ref = plots_from_measurements(m, t.track)
+        ref = plots_from_measurements(m, t.label)
         assert len(t) == m.detected.sum() < m.t.size  # missed scans left out
         np.testing.assert_array_equal(t.t, ref.t)
         np.testing.assert_array_equal(t.range, ref.range)
@@ -55,9 +55,9 @@ def test_plots_round_trip_3d(tmp_path):
     _, m = _meas(("range", "azimuth", "elevation"), (10.0, 0.01, 0.01), p_detect=1.0)
     p = tmp_path / "PLOTS.csv"
     write_plots(p, [("7", m)])
-    (t,) = read_plots(p)
+    (t,) = read_plot_tracks(p)
     ref = plots_from_measurements(m, "7")
-    assert t.track == "7" and t.is_3d and t.range_rate is None
+    assert t.label == "7" and t.is_3d and t.range_rate is None
     np.testing.assert_allclose(t.elevation, ref.elevation, rtol=0, atol=1e-15)
     np.testing.assert_array_equal(t.range, ref.range)
 
@@ -65,7 +65,7 @@ def test_plots_round_trip_3d(tmp_path):
 def test_plots_from_measurements_keeps_scan_indices():
     _, m = _meas(("azimuth", "range"), (0.01, 10.0), p_detect=0.7)
     pt = plots_from_measurements(m, "x")
-    np.testing.assert_array_equal(pt.lines, np.flatnonzero(m.detected))
+    np.testing.assert_array_equal(pt.line, np.flatnonzero(m.detected))
     np.testing.assert_array_equal(pt.range, m.z[m.detected, 1])
     np.testing.assert_array_equal(pt.sensor_vel, m.sensor_vel[m.detected])
     _, mb = _meas(("azimuth",), (0.01,))

@@ -7,8 +7,8 @@ import os
 import numpy as np
 import pytest
 
+from seatrack.io.navigation import read_echoes, read_gyro, write_echoes, write_gyro
 from seatrack.io.table import InputError
-from seatrack.navigation.files import read_echoes, read_gyro, write_echoes, write_gyro
 
 
 def test_round_trip_and_atomic_write(tmp_path):

@@ -9,7 +9,7 @@
 
 Numbers are written with full float precision (``repr``), so a file read back gives the
 same values bit for bit. :func:`plots_from_measurements` builds the in-memory
-:class:`~seatrack.io.plots.PlotTrack` a track method takes, without a file.
+:class:`~seatrack.filters.base.Plots` a track method takes, without a file.
 """
 
 from __future__ import annotations
@@ -21,9 +21,9 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.filters.base import Plots
 from seatrack.geometry import bearing_rad_to_deg
 from seatrack.io.atomic import atomic_write
-from seatrack.io.plots import PlotTrack
 from seatrack.io.table import (
     InputError,
     angle_deg,
@@ -85,8 +85,8 @@ def _component(meas: Measurements, name: str) -> FloatArray | None:
     return meas.z[:, meas.components.index(name)]
 
 
-def plots_from_measurements(meas: Measurements, track_id: str = "1") -> PlotTrack:
-    """In-memory :class:`PlotTrack` of the detected scans of ``meas`` (no file).
+def plots_from_measurements(meas: Measurements, track_id: str = "1") -> Plots:
+    """In-memory :class:`~seatrack.filters.base.Plots` of the detected scans of ``meas`` (no file).
 
     Parameters
     ----------
@@ -96,9 +96,10 @@ def plots_from_measurements(meas: Measurements, track_id: str = "1") -> PlotTrac
 
     Returns
     -------
-    PlotTrack
-        Only detected scans; ``lines`` holds the scan index of each plot (0-based), so
-        outputs can be put back on the full scan grid with ``np.flatnonzero(meas.detected)``.
+    Plots
+        Only detected scans, labelled ``track_id``; ``line`` holds the scan index of each
+        plot (0-based), so outputs can be put back on the full scan grid with
+        ``np.flatnonzero(meas.detected)``.
         Sensor velocity is the simulated one (not a finite difference).
 
     Raises
@@ -115,8 +116,7 @@ def plots_from_measurements(meas: Measurements, track_id: str = "1") -> PlotTrac
     keep = np.flatnonzero(meas.detected)
     el = _component(meas, "elevation")
     rr = _component(meas, "range_rate")
-    return PlotTrack(
-        track=str(track_id),
+    return Plots(
         t=meas.t[keep].copy(),
         range=rng[keep].copy(),
         azimuth=az[keep].copy(),
@@ -124,7 +124,8 @@ def plots_from_measurements(meas: Measurements, track_id: str = "1") -> PlotTrac
         range_rate=None if rr is None else rr[keep].copy(),
         sensor=meas.sensor_pos[keep].copy(),
         sensor_vel=meas.sensor_vel[keep].copy(),
-        lines=keep.astype(np.int64),
+        line=keep.astype(np.int64),
+        track=np.full(keep.size, str(track_id)),
     )
 
 

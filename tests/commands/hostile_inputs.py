@@ -16,17 +16,14 @@ bytes inserted, or the whole file replaced by binary data.
 
 from __future__ import annotations
 
-import contextlib
-import io
 import os
 import re
-import sys
 from dataclasses import dataclass
 from pathlib import Path
 
 from hypothesis import strategies as st
 
-from seatrack.cli import main
+from cli_inprocess import seatrack
 
 #: values a cell is replaced with
 CELL_VALUES = (
@@ -95,18 +92,8 @@ class Result:
 
 def run_cli(*args: object) -> Result:
     """Run ``seatrack ARGS`` in this process; never raises (SystemExit is the status)."""
-    out, err = io.StringIO(), io.StringIO()
-    code = 0
-    argv = sys.argv
-    sys.argv = ["seatrack", *map(str, args)]
-    try:
-        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
-            main()
-    except SystemExit as exc:
-        code = exc.code if isinstance(exc.code, int) else (0 if exc.code is None else 1)
-    finally:
-        sys.argv = argv
-    return Result(code, out.getvalue(), err.getvalue())
+    r = seatrack(*args)
+    return Result(r.returncode, r.stdout, r.stderr)
 
 
 def snapshot(paths: list[Path]) -> dict[Path, bytes | None]:

@@ -12,6 +12,7 @@ import pytest
 from typer.testing import CliRunner
 
 from ais_samples import data_file
+from cli_inprocess import seatrack
 from seatrack.cli import app
 
 
@@ -70,24 +71,14 @@ def test_ais_command_writes_every_row(tmp_path: Path) -> None:
 def test_ais_command_user_error_is_one_line(tmp_path: Path) -> None:
     bad = tmp_path / "x.csv"
     bad.write_text("a,b\n1,2\n")
-    res = subprocess.run(
-        [sys.executable, "-m", "seatrack.cli", "ais", str(bad), "--out", str(tmp_path / "o.csv")],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    res = seatrack("ais", bad, "--out", tmp_path / "o.csv")
     assert res.returncode == 2
     assert res.stderr.startswith("error: ") and "x.csv" in res.stderr
     assert "Traceback" not in res.stderr
 
 
 def _run(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "seatrack.cli", "ais", *args],
-        capture_output=True,
-        text=True,
-        timeout=300,
-    )
+    return seatrack("ais", *args)
 
 
 def _one_line_error(res: subprocess.CompletedProcess[str], *words: str) -> None:

@@ -1,16 +1,13 @@
 import csv
-import subprocess
-import sys
 
 import numpy as np
 
+from cli_inprocess import seatrack
 from seatrack.simulate import Leg, NoiseModel, observe, trajectory
 
 
 def _seatrack(*args, cwd):
-    return subprocess.run(
-        [sys.executable, "-m", "seatrack.cli", *args], capture_output=True, text=True, cwd=cwd
-    )
+    return seatrack(*args, cwd=cwd)
 
 
 def _write_plots(path):

@@ -1,21 +1,18 @@
 """``seatrack track`` on unlabelled plots and ``seatrack evaluate`` on a multi-target scenario."""
 
 import csv
-import subprocess
-import sys
 
 import numpy as np
 import pytest
 
+from cli_inprocess import seatrack
 from seatrack.io.multitarget import track_unlabelled, write_unlabelled_plots
 from seatrack.simulate.multitarget import TargetPopulation, simulate_multitarget
 from seatrack.simulate.scenarios import SensorConfig
 
 
 def _seatrack(*args, cwd):
-    return subprocess.run(
-        [sys.executable, "-m", "seatrack.cli", *args], capture_output=True, text=True, cwd=cwd
-    )
+    return seatrack(*args, cwd=cwd)
 
 
 def _plots_file(path, seed=0):

@@ -56,6 +56,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import gammaln, ndtr
 
@@ -83,8 +84,9 @@ from seatrack.filters.robust_baselines import (
     huber_update,
     student_t_update,
 )
+from seatrack.kalman import cholesky_core, forward_core
 from seatrack.models.measurement import polar_measurement
-from seatrack.models.motion import cv_noise, cv_transition
+from seatrack.models.motion import cv_matrices
 from seatrack.models.targets import TargetClass
 
 FloatArray = NDArray[np.float64]
@@ -100,7 +102,7 @@ __all__ = [
     "StudentTLevelsConfig",
     "level_noise",
     "outlier_patterns",
-    "contaminated_update",
+    "mixture_update",
     "contaminated_loglik",
     "LevelIMM",
     "ContaminatedLevels",
@@ -108,6 +110,8 @@ __all__ = [
     "HuberLevels",
     "StudentTLevels",
 ]
+
+_LOG_2PI = math.log(2.0 * math.pi)
 
 #: the self-tuning ladder of process-noise PSDs, m^2/s^3 (no target class given)
 LADDER = (1e-4, 1e-2, 1.0, 1e2, 1e4)
@@ -143,7 +147,7 @@ class LevelConfig:
             raise ValueError("q_levels: at least one process-noise level is needed")
         for name in ("q_levels", "accel_levels", "sojourn_times"):
             vals = getattr(self, name)
-            if any(not (math.isfinite(v) and v > 0) for v in vals):
+            if any(not (isinstance(v, int | float) and math.isfinite(v) and v > 0) for v in vals):
                 raise ValueError(f"{name}: every value must be a positive number, got {vals}")
         if self.sojourn_times and len(self.sojourn_times) != len(levels):
             raise ValueError(
@@ -279,54 +283,169 @@ def outlier_patterns(scales: FloatArray, epsilon: float) -> tuple[FloatArray, Fl
     return G, logp
 
 
-def contaminated_loglik(
-    y: FloatArray, HPH: FloatArray, r: FloatArray, G: FloatArray, logp: FloatArray, k: FloatArray
-) -> FloatArray:
-    """``log sum_g pi_g N(y; 0, H P H^T + R_g)`` for innovations ``y (..., m)``, predicted
-    measurement covariances ``HPH (..., m, m)``, nominal variances ``r (m,)``."""
-    Rg = (r * np.where(G > 0, k, 1.0))[:, :, None] * np.eye(r.size)  # (C, m, m)
-    _, ll = kalman.nis_log_likelihood(y[..., None, :], HPH[..., None, :, :] + Rg)
-    return np.asarray(np.logaddexp.reduce(ll + logp, axis=-1))
+@njit(cache=True)
+def _mixture_core(P, y, H, r, G, logp, k, dx, Po, ll, pout):  # pragma: no cover - compiled
+    """Update of ``N`` Gaussians ``(x_i, P_i)`` on innovations ``y_i`` under plot noise that
+    is, per pattern ``g``, ``N(0, diag(r_i * k^G_g))`` with prior ``exp(logp_g)``.
+
+    With ``u_g = S_g^-1 y`` and weights ``w_g ∝ pi_g N(y; 0, S_g)`` the collapsed posterior
+    is exactly ``x + P H^T u``, ``P - P H^T W H P`` with ``u = sum w_g u_g`` and
+    ``W = sum w_g (S_g^-1 - (u_g - u)(u_g - u)^T)`` -- every pattern costs an ``m x m``
+    factorisation only. Writes the state correction ``dx``, ``Po``, the log-likelihood and
+    the posterior outlier probability of each channel; a non-positive-definite ``S_g``
+    gives NaN.
+    """
+    N, n = dx.shape
+    m = y.shape[1]
+    C = G.shape[0]
+    PHt = np.empty((n, m))
+    HPH = np.empty((m, m))
+    S = np.empty((m, m))
+    L = np.empty((m, m))
+    Si = np.empty((C, m, m))
+    u = np.empty((C, m))
+    lw = np.empty(C)
+    e = np.empty(m)
+    ub = np.empty(m)
+    W = np.empty((m, m))
+    PW = np.empty((n, m))
+    for i in range(N):
+        for a in range(n):
+            for c in range(m):
+                v = 0.0
+                for b in range(n):
+                    v += P[i, a, b] * H[i, c, b]
+                PHt[a, c] = v
+        for a in range(m):
+            for c in range(m):
+                v = 0.0
+                for b in range(n):
+                    v += H[i, a, b] * PHt[b, c]
+                HPH[a, c] = v
+        bad = False
+        for g in range(C):
+            for a in range(m):
+                for c in range(m):
+                    S[a, c] = 0.5 * (HPH[a, c] + HPH[c, a])
+                S[a, a] += r[i, a] * (k[a] if G[g, a] > 0.0 else 1.0)
+            logdet = cholesky_core(S, L)
+            if not logdet == logdet:
+                bad = True
+                break
+            for col in range(m):  # S^-1 column by column
+                for a in range(m):
+                    e[a] = 1.0 if a == col else 0.0
+                forward_core(L, e, ub)
+                for a in range(m - 1, -1, -1):
+                    v = ub[a]
+                    for b in range(a + 1, m):
+                        v -= L[b, a] * Si[g, b, col]
+                    Si[g, a, col] = v / L[a, a]
+            q = 0.0
+            for a in range(m):
+                v = 0.0
+                for b in range(m):
+                    v += Si[g, a, b] * y[i, b]
+                u[g, a] = v
+                q += y[i, a] * v
+            lw[g] = logp[g] - 0.5 * (q + logdet + m * _LOG_2PI)
+        if bad:
+            ll[i] = np.nan
+            for a in range(n):
+                dx[i, a] = np.nan
+            continue
+        top = lw.max()
+        tot = 0.0
+        for g in range(C):
+            tot += math.exp(lw[g] - top)
+        lse = top + math.log(tot)
+        ll[i] = lse
+        for a in range(m):
+            ub[a] = 0.0
+            pout[i, a] = 0.0
+            for c in range(m):
+                W[a, c] = 0.0
+        for g in range(C):
+            w = math.exp(lw[g] - lse)
+            for a in range(m):
+                ub[a] += w * u[g, a]
+                pout[i, a] += w * G[g, a]
+                for c in range(m):
+                    W[a, c] += w * (Si[g, a, c] - u[g, a] * u[g, c])
+        for a in range(m):
+            for c in range(m):
+                W[a, c] += ub[a] * ub[c]
+        for a in range(n):
+            v = 0.0
+            for c in range(m):
+                v += PHt[a, c] * ub[c]
+            dx[i, a] = v
+            for c in range(m):
+                v = 0.0
+                for b in range(m):
+                    v += PHt[a, b] * W[b, c]
+                PW[a, c] = v
+        for a in range(n):
+            for b in range(a, n):
+                v = P[i, a, b]
+                for c in range(m):
+                    v -= PW[a, c] * PHt[b, c]
+                Po[i, a, b] = v
+                Po[i, b, a] = v
 
 
-def contaminated_update(
+#: the single pattern of Gaussian plot noise, per measurement size
+_GAUSSIAN = {m: (np.zeros((1, m)), np.zeros(1), np.ones(m)) for m in range(1, 6)}
+
+
+def _flat(a: FloatArray, lead: tuple[int, ...], tail: tuple[int, ...]) -> FloatArray:
+    """``a`` broadcast to ``lead + tail`` as a contiguous ``(N,) + tail`` array."""
+    if a.shape != lead + tail:
+        a = np.broadcast_to(a, lead + tail)
+    return np.ascontiguousarray(a).reshape((-1,) + tail)
+
+
+def mixture_update(
     x: FloatArray,
     P: FloatArray,
-    z: FloatArray,
-    hx: FloatArray,
+    y: FloatArray,
     H: FloatArray,
     r: FloatArray,
-    angular: FloatArray,
-    G: FloatArray,
-    logp: FloatArray,
-    k: FloatArray,
+    patterns: tuple[FloatArray, FloatArray, FloatArray] | None = None,
 ) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Exact EKF update under the contaminated-Gaussian plot noise (see the module notes).
+    """Exact update of Gaussians ``x (..., n)``, ``P (..., n, n)`` on innovations
+    ``y (..., m)`` (angles already wrapped) with Jacobians ``H (..., m, n)`` under
+    contaminated plot noise (``patterns`` = :func:`outlier_patterns` and the scales ``k``)
+    or, without patterns, Gaussian noise ``diag(r)``; ``r (..., m)`` or ``(m,)``.
 
-    Returns the collapsed posterior ``x (..., n)``, ``P (..., n, n)``, the log-likelihood
-    ``(...)`` and the posterior outlier probability of each channel ``(..., m)``.
+    Returns the collapsed posterior ``x``, ``P``, the log-likelihood ``(...)`` and the
+    posterior outlier probability of each channel ``(..., m)`` (compiled
+    :func:`_mixture_core`).
     """
-    Rg = (r * np.where(G > 0, k, 1.0))[:, :, None] * np.eye(r.size)
-    res = kalman.extended_update(
-        x[..., None, :], P[..., None, :, :], z[..., None, :], hx[..., None, :],
-        H[..., None, :, :], Rg, angular, check=False,
+    lead, n, m = x.shape[:-1], x.shape[-1], y.shape[-1]
+    N = int(np.prod(lead))
+    G, logp, k = patterns if patterns is not None else _GAUSSIAN[m]
+    dx = np.empty((N, n))
+    Po = np.empty((N, n, n))
+    ll = np.empty(N)
+    pout = np.empty((N, m))
+    _mixture_core(
+        _flat(P, lead, (n, n)), _flat(y, lead, (m,)), _flat(H, lead, (m, n)),
+        _flat(r, lead, (m,)), G, logp, k, dx, Po, ll, pout,
     )  # fmt: skip
-    lw = res.log_likelihood + logp  # (..., C)
-    with np.errstate(invalid="ignore"):
-        tot = np.logaddexp.reduce(lw, axis=-1)
-        w = np.exp(lw - tot[..., None])
-    xm = np.einsum("...c,...cn->...n", w, res.x)
-    dx = res.x - xm[..., None, :]
-    Pm = np.einsum("...c,...cij->...ij", w, res.P + dx[..., :, None] * dx[..., None, :])
-    return xm, kalman.symmetrize(Pm), tot, w @ G
+    xo = x + dx.reshape(lead + (n,))
+    return xo, Po.reshape(lead + (n, n)), ll.reshape(lead), pout.reshape(lead + (m,))
+
+
+def contaminated_loglik(
+    y: FloatArray, H: FloatArray, P: FloatArray, r: FloatArray, patterns: Any
+) -> FloatArray:
+    """``log sum_g pi_g N(y; 0, H P H^T + R_g)`` of innovations ``y (..., m)``."""
+    return mixture_update(np.zeros(P.shape[:-1]), P, y, H, r, patterns)[2]
 
 
 def _hph(H: FloatArray, P: FloatArray) -> FloatArray:
     return np.asarray(H @ P @ np.swapaxes(H, -1, -2))
-
-
-def _diag(v: FloatArray) -> FloatArray:
-    return v[..., :, None] * np.eye(v.shape[-1])
 
 
 # ---------------------------------------------------------------------------
@@ -376,6 +495,7 @@ class LevelIMM:
             ang[2] = 1.0  # elevation
         self.angular = ang
         self.M = self.config.n_levels
+        self._valid = np.ones((self.M, 2 * d))
         eps = float(getattr(self.config, "outlier_probability", 0.0))
         self.patterns: tuple[FloatArray, FloatArray, FloatArray] | None = None
         if eps > 0:
@@ -409,10 +529,11 @@ class LevelIMM:
         a = state.aux
         q, PI = level_noise(self.config, dt)
         n = state.x.shape[1]
-        X0, P0, c = mix(IMMState(a["X"], a["PP"], a["mu"]), PI, np.ones((self.M, n)))
-        F = cv_transition(dt, self.d)[:, None]
-        Q = q[:, :, None, None] * cv_noise(dt, 1.0, self.d)[:, None]
-        X, PP = kalman.predict(X0, P0, F, Q)
+        X0, P0, c = mix(IMMState(a["X"], a["PP"], a["mu"]), PI, self._valid)
+        F, Q1 = cv_matrices(dt, 1.0, self.d)  # one cached pair when the scans are regular
+        Q1 = Q1[:, None] if Q1.ndim == 3 else Q1
+        F = F[:, None] if F.ndim == 3 else F
+        X, PP = kalman.predict(X0, P0, F, q[:, :, None, None] * Q1)
         _, x, P, _ = combine(X, PP, c, np.zeros_like(c), np.arange(n))
         out = predicted(state, tt, x, P, {"X": X, "PP": PP, "mu": c, "q": q})
         still = dt <= 0  # predicting to the same time changes nothing
@@ -456,14 +577,10 @@ class LevelIMM:
         self, X: FloatArray, P: FloatArray, z: FloatArray, hx: FloatArray, H: FloatArray
     ) -> _Updated:
         """The update of every level: exact under the contaminated noise (``epsilon > 0``),
-        else the Gaussian EKF update."""
-        if self.patterns is not None:
-            G, logp, k = self.patterns
-            x, Pm, ll, p = contaminated_update(X, P, z[:, None], hx, H, self.r, self.angular,
-                                               G, logp, k)  # fmt: skip
-            return _Updated(x, Pm, ll, p)
-        res = kalman.extended_update(X, P, z[:, None], hx, H, self.R, self.angular, check=False)
-        return _Updated(res.x, res.P, res.log_likelihood, np.zeros(hx.shape))
+        else the Gaussian EKF update (:func:`mixture_update`)."""
+        y = wrap_angles(z[:, None] - hx, self.angular)
+        x, Pm, ll, p = mixture_update(X, P, y, H, self.r, self.patterns)
+        return _Updated(x, Pm, ll, p)
 
     def columns(self, state: TrackState) -> dict[str, NDArray[Any]]:
         """Common columns, ``p_manoeuvre`` (probability of every level but the quietest),
@@ -506,15 +623,12 @@ class RamazanovLevels(LevelIMM):
         c = self.config
         delta = np.array([c.delta_range, c.delta_bearing])
         y = wrap_angles(z[:, None] - hx, self.angular)
-        HPH = _hph(H, P)
-        hph = np.diagonal(HPH, axis1=-2, axis2=-1)
-        J = y**2 / (hph + self.r)
-        out = J > delta
+        hph = np.einsum("...ij,...jk,...ik->...i", H, P, H)
+        out = y**2 / (hph + self.r) > delta
         r = np.where(out, y**2 / delta - hph, self.r)
-        res = kalman.extended_update(X, P, z[:, None], hx, H, _diag(r), self.angular, False)
-        assert self.patterns is not None  # epsilon > 0 (validated)
-        ll = contaminated_loglik(y, HPH, self.r, *self.patterns)
-        return _Updated(res.x, res.P, ll, out.astype(float))
+        x, Pm, _, _ = mixture_update(X, P, y, H, r)
+        ll = contaminated_loglik(y, H, P, self.r, self.patterns)
+        return _Updated(x, Pm, ll, out.astype(float))
 
 
 def _whitened(
@@ -524,6 +638,33 @@ def _whitened(
     and the log of those stds summed (for the densities)."""
     s = np.diagonal(_hph(H, P), axis1=-2, axis2=-1) + r
     return y / np.sqrt(s), 0.5 * np.log(s).sum(-1)
+
+
+@dataclass(frozen=True)
+class _Result:
+    """The fields of an update the reweighting of :mod:`robust_baselines` reads."""
+
+    x: FloatArray
+    P: FloatArray
+    y: FloatArray
+
+
+def _kernel_update(
+    x: FloatArray,
+    P: FloatArray,
+    z: FloatArray,
+    hx: FloatArray,
+    H: FloatArray,
+    R: FloatArray,
+    angular: ArrayLike,
+    check: bool = False,
+) -> _Result:
+    """:func:`seatrack.kalman.extended_update` with a diagonal ``R`` through the compiled
+    :func:`mixture_update` (one call for every level of every track; non-positive-definite
+    innovation covariances give NaN, rejected by the caller)."""
+    y = wrap_angles(z - hx, np.asarray(angular, dtype=float))
+    xo, Po, _, _ = mixture_update(x, P, y, H, np.diagonal(R, axis1=-2, axis2=-1))
+    return _Result(xo, Po, y)
 
 
 class _RobustRule(LevelIMM):
@@ -540,7 +681,8 @@ class _RobustRule(LevelIMM):
         self, X: FloatArray, P: FloatArray, z: FloatArray, hx: FloatArray, H: FloatArray
     ) -> _Updated:
         zz = np.broadcast_to(z[:, None], hx.shape)
-        res, flags = self.update_fn(X, P, zz, hx, H, self.R, self.r, self._cfg, check=False)
+        res, flags = self.update_fn(X, P, zz, hx, H, self.R, self.r, self._cfg, False,
+                                    _kernel_update)  # fmt: skip
         y = wrap_angles(zz - hx, self.angular)
         u, logs = _whitened(y, H, P, self.r)
         return _Updated(res.x, res.P, self._density(u) - logs, flags.astype(float))

@@ -39,7 +39,6 @@ Run: ``python benchmarks/defaults.py`` (20 runs per set), ``--runs N``, ``--quic
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import sys
 import time
@@ -51,7 +50,7 @@ import numpy as np
 
 from seatrack import kalman
 from seatrack.evaluate.montecarlo import format_table
-from seatrack.filters.base import Plots, measurement_model, plot_gaussian
+from seatrack.filters.base import measurement_model, plot_gaussian
 from seatrack.filters.registry import METHODS, run
 from seatrack.models.motion import cv_noise, cv_transition
 from seatrack.models.targets import TargetClass, target_class
@@ -63,6 +62,7 @@ from seatrack.simulate.families import (
     Scenario,
     SensorSpec,
     ais_replay,
+    labelled_runs,
     random_manoeuvres,
     weaving,
 )
@@ -146,20 +146,6 @@ def nominal_config(sc: Scenario) -> dict[str, Any]:
     return cfg
 
 
-def labelled(scs: Sequence[Scenario]) -> Plots:
-    """The plots of every run of a set as ONE labelled file (track ``r<i>`` = run ``i``),
-    as ``seatrack track`` reads a file of many tracks."""
-    parts = [dataclasses.replace(s.plots, elevation=None) for s in scs]
-
-    def cat(name: str) -> Any:
-        vals = [getattr(p, name) for p in parts]
-        return None if vals[0] is None else np.concatenate(vals)
-
-    labels = np.concatenate([np.full(len(p), f"r{i}") for i, p in enumerate(parts)])
-    fields = ("t", "range", "azimuth", "elevation", "range_rate", "sensor", "sensor_vel")
-    return Plots(*(cat(f) for f in fields), track=labels)
-
-
 def run_method(name: str, scs: Sequence[Scenario], config: dict[str, Any]) -> Estimate:
     """Run track method ``name`` over the runs of a set: ``(B, N, 4)`` x, y, vx, vy.
 
@@ -167,7 +153,7 @@ def run_method(name: str, scs: Sequence[Scenario], config: dict[str, Any]) -> Es
     (:func:`seatrack.filters.registry.run`, i.e. ``run_tracks`` over a file whose tracks
     are the runs -- all runs as one batch per scan, as ``seatrack track`` does).
     """
-    cols = run(name, labelled(scs), config)
+    cols = run(name, labelled_runs(scs), config)
     est = np.stack([cols["x_m"], cols["y_m"], cols["vx_mps"], cols["vy_mps"]], -1)
     return est.reshape(len(scs), -1, 4)
 

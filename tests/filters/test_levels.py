@@ -243,3 +243,20 @@ def test_kalman_update_is_the_gaussian_rule():
     assert np.allclose(res.X, ref.x, rtol=1e-12, atol=1e-9)
     assert np.allclose(res.P, ref.P, rtol=1e-9, atol=1e-9)
     assert np.allclose(res.ll, ref.log_likelihood, rtol=1e-12)
+
+
+@pytest.mark.parametrize("epsilon, lo, hi", [(0.0, 0.0, 0.03), (0.2, 0.12, 0.3)])
+def test_the_outlier_probability_is_learnt(epsilon, lo, hi):
+    """robust-adaptive learns each channel's outlier rate: it falls on clean plots and
+    settles near the true 20 % on contaminated ones (8 tracks, 300 scans)."""
+    parts = [_plots([Leg.straight(1e4)], n=300, seed=50 + i, epsilon=epsilon)[0] for i in range(8)]
+    f = ContaminatedLevels(ContaminatedConfig(), SENSOR)
+    eps = []
+    for p in parts:
+        x0, P0 = plot_gaussian(p.take([0]), SENSOR, 10.0, False)
+        st = f.initiate(p.t[:1], x0, P0)
+        for k in range(1, len(p)):
+            st = f.update(f.predict(st, p.t[k : k + 1]), p.take([k]))
+        eps.append(st.aux["eps"][0])
+    mean = np.mean(eps, axis=0)
+    assert np.all((lo <= mean) & (mean <= hi)), mean

@@ -726,6 +726,7 @@ class _RobustRule(LevelIMM):
 
     dims: ClassVar[tuple[int, ...]] = (2,)
     _cfg: Any
+    update_fn: Any
 
     def _density(self, u: FloatArray) -> FloatArray:
         raise NotImplementedError

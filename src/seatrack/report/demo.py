@@ -190,7 +190,12 @@ def range_rate_section(out: Path, runs: int) -> Section:
     """Pulse-Doppler radar with range rate, fighter turning at 3-6 g."""
     from seatrack.simulate.families import random_manoeuvres
 
-    jobs = [("mm-rangerate-spec", {}), ("mm-rangerate", {}), ("imm", {}), ("turning", {})]
+    jobs: list[tuple[str, dict[str, Any]]] = [
+        ("mm-rangerate-spec", {}),
+        ("mm-rangerate", {}),
+        ("imm", {}),
+        ("turning", {}),
+    ]
     return _tracking_section(
         "range_rate",
         "Multiple models with range rate: a fighter",

@@ -514,4 +514,4 @@ def labelled_runs(scenarios: Sequence[Scenario]) -> Plots:
 
     labels = np.concatenate([np.full(len(p), f"r{i}") for i, p in enumerate(parts)])
     fields = ("t", "range", "azimuth", "elevation", "range_rate", "sensor", "sensor_vel")
-    return Plots(*(cat(f) for f in fields), track=labels)
+    return Plots(**{f: cat(f) for f in fields}, track=labels)

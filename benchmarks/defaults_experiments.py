@@ -1,27 +1,35 @@
-"""EXPERIMENTAL prototypes for issue 16, phase B -- measured with ``benchmarks/defaults.py``.
+"""EXPERIMENTAL prototypes of issue 16 that are NOT library methods, measured beside them.
 
-Nothing here is a library method: these are batched prototypes (all runs of a set at
-once) of the improvements the issue asks for, kept in the repository so that the numbers
-in ``docs/notes/defaults_research.md`` can be reproduced. Each prototype gets only what a
-user gives -- the sensor's nominal noise -- unless its label says ``+class`` (the target
-class of the set, :mod:`seatrack.models.targets`).
+What the measurements made the library's defaults (the level IMM with the contaminated
+update, :mod:`seatrack.filters.levels`; the IMM with range rate) runs from the library here
+(rows ``label=method``: configurations of registered methods). What remains are batched
+prototypes (all runs of a set at once) of the ideas the measurements did NOT adopt, kept so
+that the numbers in ``docs/turning.md`` ("Research: what else was measured") can be
+reproduced. Each prototype gets only what a user gives -- the sensor's nominal noise --
+unless its label says ``+class`` (the target class of the set,
+:mod:`seatrack.models.targets`); ``ORACLE`` rows know the truth.
 
-Prototypes (equations in the notes):
+Prototypes:
 
 * ``turn-centripetal`` -- the turning method's idea, kept on through a steady turn: a CV
   EKF whose white-noise acceleration PSD is ``q = q_nom + kappa (w v)^2 T`` while the
   heading filter's turn rate is significant (``|w| > sig sigma_w``), with ``w`` from a
   (heading, turn rate) Kalman filter on the EKF's velocity (spec steps S2/S3).
+* ``turn-ct`` -- the same detector, a coordinated-turn prediction at its turn rate.
 * ``cm-ekf`` -- self-tuning CV EKF: ``q`` by innovation covariance matching (Mehra 1972;
   Sage-Husa-type fading memory ``b``): ``q_k = clip(EWMA_b(qhat_k))`` with
   ``qhat_k = sum_c (y_c^2 - S0_cc) / sum_c (H Q1 H^T)_cc``, ``S0 = H F P F^T H^T + R``.
 * ``robust-cm`` -- algorithm R's robust variance (``R_c <- max(R_c, y_c^2/Delta -
   (H P H^T)_cc)``) plus covariance matching on the CAPPED innovations
-  (``y_c^2 -> min(y_c^2, Delta S_cc)``), so a lone outlier moves ``q`` by at most one
-  capped term while a manoeuvre (a run of large innovations) raises it.
+  (``y_c^2 -> min(y_c^2, Delta S_cc)``).
+* ``mode-q`` -- ONE CV EKF whose ``q`` is mixed by the mode probabilities of process-noise
+  levels (a Bayesian "raise Q" decision without a state per level).
+* ``ct-ekf`` -- a single coordinated-turn EKF (turn rate in the state).
+* ``ORACLE q`` / ``ORACLE ct`` -- the true centripetal Q schedule / a CT prediction at the
+  true turn rate: the head-room of any Q schedule and of a perfect turn-rate estimate.
 
-Run: ``python benchmarks/defaults_experiments.py --runs 20`` (tuning seeds, then the
-chosen variants on headline seeds); ``--sets``; ``--grid`` for the parameter sweeps.
+Run: ``python benchmarks/defaults_experiments.py --runs 20`` (TUNING seeds),
+``--headline`` (HEADLINE seeds), ``--sets``, ``--consistency`` (multiple-model methods).
 """
 
 from __future__ import annotations
@@ -348,99 +356,6 @@ def ct_ekf_batch(
     return out
 
 
-def _mixture_update(
-    x: np.ndarray,
-    P: np.ndarray,
-    z: np.ndarray,
-    hx: np.ndarray,
-    H: np.ndarray,
-    y: np.ndarray,
-    R0: np.ndarray,
-    ang: np.ndarray,
-    epsilon: float,
-    k: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Exact update under a contaminated-Gaussian measurement model: every combination of
-    nominal / outlier channels is a Kalman update with its own R; the posterior is their
-    mixture collapsed to its mean and covariance, the likelihood their prior-weighted sum
-    (log space). ``epsilon = 0``: the plain EKF update."""
-    m = R0.shape[0]
-    combos = [np.array(c) for c in np.ndindex(*(2,) * m)] if epsilon > 0 else [np.zeros(m, int)]
-    xs, Ps, lls = [], [], []
-    for c in combos:
-        Rc = R0 * np.where(c > 0, k, 1.0)[:, None]
-        prior = float(np.prod(np.where(c > 0, epsilon, 1 - epsilon)))
-        res = kalman.extended_update(x, P, z, hx, H, Rc, ang, check=False)
-        xs.append(res.x)
-        Ps.append(res.P)
-        lls.append(np.log(prior) + res.log_likelihood)
-    ll = np.stack(lls)  # (C, ...)
-    tot = np.logaddexp.reduce(ll, axis=0)
-    w = np.exp(ll - tot)
-    xm = np.einsum("c...,c...n->...n", w, np.stack(xs))
-    d = np.stack(xs) - xm
-    Pm = np.einsum("c...,c...nm->...nm", w, np.stack(Ps) + d[..., :, None] * d[..., None, :])
-    return xm, Pm, tot
-
-
-def imm_levels_batch(
-    scs: Sequence[Scenario],
-    qs: Sequence[float],
-    p_stay: Sequence[float],
-    epsilon: float = 0.0,
-    scale: Sequence[float] = (10.0, 25.0, 10.0),
-    speed_sigma: float = SPEED_SIGMA,
-) -> Estimate:
-    """IMM of CV EKFs with PSDs ``qs`` (persistence ``p_stay`` per level, the rest spread
-    uniformly over the other levels), batched over the runs, with
-    an optional contaminated-Gaussian measurement model per channel: prior outlier
-    probability ``epsilon``, outlier variance ``scale_c R_c`` (:func:`_mixture_update`);
-    its likelihood is a mixture too, so one outlier barely moves the model probabilities
-    while a manoeuvre (a run of innovations too large even for the outlier component of
-    the low-q model) does."""
-    st = stack_plots(scs)
-    z, sen, t = st["z"], st["sensor"], st["t"]
-    B, N, m = z.shape
-    model = measurement_model(2, 4, m == 3)
-    ang = model.angular.astype(float)
-    x0, P0 = _start(scs, speed_sigma)
-    M = len(qs)
-    X = np.repeat(x0[:, None], M, 1)  # (B, M, 4)
-    P = np.repeat(P0[:, None], M, 1)
-    mu = np.full((B, M), 1.0 / M)
-    ps = np.asarray(p_stay, dtype=float)
-    PI = np.where(np.eye(M) > 0, ps[:, None], ((1 - ps) / max(M - 1, 1))[:, None])
-    R0 = _R(scs, m)
-    k = np.asarray(scale, dtype=float)[:m]
-    qs = np.asarray(qs, dtype=float)
-    out = np.empty((B, N, 4))
-    out[:, 0] = x0
-    for kk in range(1, N):
-        dt = float(t[kk] - t[kk - 1])
-        # mixing
-        c = mu @ PI  # (B, M)
-        w = mu[:, :, None] * PI[None] / np.maximum(c[:, None, :], 1e-300)  # (B, i, j)
-        Xm = np.einsum("bij,bin->bjn", w, X)
-        d = X[:, :, None, :] - Xm[:, None, :, :]  # (B, i, j, n)
-        Pm = np.einsum("bij,bijnm->bjnm", w, P[:, :, None] + d[..., :, None] * d[..., None, :])
-        F = cv_transition(dt, 2)
-        Q = cv_noise(dt, qs, 2)  # (M, 4, 4)
-        Xp = Xm @ F.T
-        Pp = F @ Pm @ F.T + Q[None]
-        s = sen[:, kk][:, None]
-        hx = model.h(Xp, s)
-        H = model.jacobian(Xp, s)
-        y = z[:, kk][:, None] - hx
-        y = np.where(ang > 0, wrap_pi(y), y)
-        X, P, L = _mixture_update(Xp, Pp, z[:, kk][:, None], hx, H, y, R0, ang, epsilon, k)
-        lw = np.log(np.maximum(c, 1e-300)) + L
-        lw -= lw.max(-1, keepdims=True)
-        mu = np.exp(lw)
-        mu /= mu.sum(-1, keepdims=True)
-        out[:, kk] = np.einsum("bj,bjn->bn", mu, X)
-    return out
-
-
 # ---------------------------------------------------------------------------
 # Experiments
 # ---------------------------------------------------------------------------
@@ -500,38 +415,26 @@ def variants_for(set_name: str, dt: float, tc: TargetClass) -> dict[str, Callabl
     return v
 
 
-def level_rows(scs: list[Scenario], tc: TargetClass) -> list[dict[str, Any]]:
-    """Level-IMM rows: the class-free ladder :data:`L5` and the class's two levels, each
-    with a Gaussian and a contaminated (epsilon = 0.1) measurement model."""
-    dt = scs[0].dt
-    cfgs = {
-        "imm-levels L5": (L5, [0.95] * 5, 0.0, SPEED_SIGMA),
-        "imm-levels L5 mix0.1": (L5, [0.95] * 5, 0.1, SPEED_SIGMA),
-        "imm2+class": ((tc.q_steady(dt), tc.q_max(dt)), tc.p_stay(dt), 0.0, tc.speed_max),
-        "imm2+class mix0.1": ((tc.q_steady(dt), tc.q_max(dt)), tc.p_stay(dt), 0.1, tc.speed_max),
-    }
-    out = []
-    for label, (qs, ps, eps, ss) in cfgs.items():
-        pos, vel = rmse(imm_levels_batch(scs, qs, ps, eps, speed_sigma=ss), scs)
-        out.append({"filter": label, "pos": float(pos), "vel": float(vel), "note": "",
-                    "kind": "proto"})  # fmt: skip
-    return out
-
-
 #: tuned configurations of the existing methods, measured beside their defaults
-def extra_configs(dt: float, tc: TargetClass) -> dict[str, dict[str, Any]]:
-    """Configurations of existing methods measured beside their defaults (range-rate sets):
-    ``label=method`` -> config keys added to the nominal noise."""
-    a, b = tc.p_stay(dt)
-    return {
-        "g=5 sa=10=mm-rangerate": {"accel_g": 5.0, "sigma_accel_mps2": 10.0},
-        "+rr=imm": {"use_range_rate": True},
-        "+rr qct=1000 qw=1e-3 qcv=0.01=imm": {"use_range_rate": True, "q_ct": 1000.0,
-                                              "q_omega": 1e-3, "q_cv": 0.01},
-        "+rr+class=imm": {"use_range_rate": True, "q_cv": tc.q_steady(dt),
-                          "q_ct": tc.q_tangential(dt), "q_omega": tc.q_turn_rate,
-                          "p_stay": 0.5 * (a + b)},
-    }  # fmt: skip
+def extra_configs(dt: float, tc: TargetClass, range_rate: bool) -> dict[str, dict[str, Any]]:
+    """Configurations of library methods measured beside their defaults: ``label=method``
+    -> config keys added to the nominal noise. The level IMM of :mod:`seatrack.filters.
+    levels` with the phase-A settings (Gaussian, ``epsilon = 0``; contaminated ``0.1``),
+    and, with range rate, the variants of the IMM with range rate and of the patent's bank."""
+    g, cls = {"outlier_probability": 0.0}, {"target": tc.name}
+    out: dict[str, dict[str, Any]] = {
+        "L5 gaussian=mm": g,
+        "2 levels+class gaussian=mm": {**g, **cls},
+        "L5 eps0.1=robust-adaptive": {"use_range_rate": False},
+        "2 levels+class eps0.1=robust-adaptive": {"use_range_rate": False, **cls},
+    }
+    if range_rate:
+        out |= {
+            "g=5 sa=10=mm-rangerate-spec": {"accel_g": 5.0, "sigma_accel_mps2": 10.0},
+            "+rr q_ct=100=mm-rangerate": {"q_ct": 100.0},
+            "L5 +rr=turning": {},
+        }  # fmt: skip
+    return out
 
 
 def consistency(n: int) -> None:
@@ -543,13 +446,14 @@ def consistency(n: int) -> None:
 
     scs = [SETS["fighter"].make(k) for k in seeds(n, True)]
     cfgs = {
-        "mm-rangerate": ("mm-rangerate", {}),
-        "mm-rangerate g=5 sa=10": ("mm-rangerate", {"accel_g": 5.0, "sigma_accel_mps2": 10.0}),
-        "mm": ("mm", {}),
-        "imm": ("imm", {}),
-        "imm +rr qct=1000 qw=1e-3 qcv=0.01": (
-            "imm", {"use_range_rate": True, "q_ct": 1000.0, "q_omega": 1e-3, "q_cv": 0.01}
+        "mm-rangerate-spec": ("mm-rangerate-spec", {}),
+        "mm-rangerate-spec g=5 sa=10": (
+            "mm-rangerate-spec", {"accel_g": 5.0, "sigma_accel_mps2": 10.0}
         ),
+        "mm-spec": ("mm-spec", {}),
+        "imm": ("imm", {}),
+        "mm-rangerate (IMM + rr, q_ct 1000)": ("mm-rangerate", {}),
+        "mm (level IMM)": ("mm", {}),
     }  # fmt: skip
     for label, (method, cfg) in cfgs.items():
         z2, pmax = [], []
@@ -585,10 +489,10 @@ def main(argv: Sequence[str] | None = None) -> None:
         ss = SETS[name]
         scs = [ss.make(k) for k in seeds(a.runs, tuning)]
         tc = target_class(ss.target)
-        extra = extra_configs(scs[0].dt, tc) if scs[0].plots.has_range_rate else {}
-        rows = method_rows(scs, a.methods.split(","), extra) + anchor_rows(scs, tc)
+        extra = extra_configs(scs[0].dt, tc, scs[0].plots.has_range_rate)
+        rows = method_rows(scs, a.methods.split(","), ss.target, extra) + anchor_rows(scs, tc)
         rows += proto_rows(variants_for(name, scs[0].dt, tc))(scs, tc)
-        rows += ct_rows(scs, tc) + level_rows(scs, tc)
+        rows += ct_rows(scs, tc)
         print_set(ss, rows, targets(name, rows), a.runs)
         sys.stdout.flush()
 

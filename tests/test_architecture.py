@@ -75,10 +75,7 @@ ALLOWED_LONG_FUNCTIONS = {
     ("seatrack.filters.ais.kernel", "_track_flat"),
 }
 #: (module, function) over LONG_FUNCTION lines that work in progress shortens
-KNOWN_LONG_FUNCTIONS = {
-    ("seatrack.commands.demo", "register"),  # issue 16: the demo is rewritten
-    ("seatrack.commands.demo", "demo"),  # issue 16 (the command inside register)
-}
+KNOWN_LONG_FUNCTIONS: set[tuple[str, str]] = set()
 
 
 def _modules() -> dict[str, Path]:

@@ -1,5 +1,6 @@
-"""CLI tests of `seatrack simulate`, `seatrack evaluate` and `seatrack demo`, and of clean
-user errors (message naming file and key/line, exit status 2, no traceback)."""
+"""CLI tests of `seatrack simulate`, `seatrack evaluate` and `seatrack demo` (its full run:
+tests/commands/test_demo.py), and of clean user errors (message naming file and key/line,
+exit status 2, no traceback)."""
 
 import csv
 import subprocess
@@ -152,16 +153,6 @@ def test_evaluate_table_and_reproducibility(tmp_path):
     assert rows == _csv_rows(two)
     assert rows[0]["method"] == "ekf" and float(rows[0]["pos_rmse_m"]) > 0
     assert rows[0]["failures"] == "0"
-
-
-def test_demo_writes_plots_and_table(tmp_path):
-    res = runner.invoke(app, ["demo", "--out", str(tmp_path), "--runs", "2"])
-    assert res.exit_code == 0, res.output
-    for name in ("tracks.png", "errors_T1.png", "errors_T2.png", "results.txt"):
-        assert (tmp_path / name).stat().st_size > 0
-    assert (tmp_path / "data" / "plots_radar.csv").exists()
-    text = (tmp_path / "results.txt").read_text()
-    assert "ekf" in text and "pos RMSE" in text
 
 
 def test_malformed_scenario_is_a_clean_error(tmp_path, monkeypatch, capsys):

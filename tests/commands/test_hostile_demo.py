@@ -35,7 +35,7 @@ def test_bad_output_folders(tmp_path, case):
         out.mkdir()
         (out / "data").write_text("x")
     if case == "png_is_a_folder":
-        (out / "tracks.png").mkdir(parents=True)
+        (out / "turns.png").mkdir(parents=True)
     r = run_cli("demo", "--out", out, "--runs", "1")
     assert r.code == 2 and r.err.startswith("error: ") and "Traceback" not in r.err, r
     assert str(out) in r.err

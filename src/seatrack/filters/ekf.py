@@ -33,7 +33,8 @@ from seatrack.filters.base import (
     wrap_angles,
 )
 from seatrack.models.measurement import polar_measurement
-from seatrack.models.motion import cv_matrices
+from seatrack.models.motion import cv_matrices, cv_noise, cv_transition, scan_psd
+from seatrack.models.targets import TargetClass
 
 FloatArray = NDArray[np.float64]
 
@@ -52,6 +53,18 @@ class EKFConfig:
     q: float = param(1.0, unit="m^2/s^3", doc="white-noise acceleration PSD", min=0)
     initial_speed_sigma: float = speed_sigma_param(50.0)
     use_range_rate: bool = param(True, doc="use the plots' range rate when they have one")
+    sigma_accel: float = param(
+        0.0, key="sigma_accel_mps2", unit="m/s^2",
+        doc="acceleration std whose PSD a^2 T is added to q each scan (a target sets it)",
+        min=0,
+    )  # fmt: skip
+
+    @classmethod
+    def for_target(cls, target: TargetClass) -> EKFConfig:
+        """One fixed noise for a target class: the typical manoeuvre acceleration,
+        ``q = a_typical^2 T`` (the upper end of Bar-Shalom et al.'s ``0.5 a_M <= sigma_a <=
+        a_M``), and the class's maximum speed as the initial speed std."""
+        return cls(q=0.0, sigma_accel=target.accel_typical, initial_speed_sigma=target.speed_max)
 
 
 class EKF:
@@ -102,7 +115,11 @@ class EKF:
     def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
         """Predict to ``t``; ``aux["F"]`` keeps the transition matrix (for the RTS smoother)."""
         tt, dt = step_times(state, t)
-        F, Q = cv_matrices(dt, self.config.q, self.d)
+        c = self.config
+        if c.sigma_accel > 0:
+            F, Q = cv_transition(dt, self.d), cv_noise(dt, scan_psd(c.q, c.sigma_accel, dt), self.d)
+        else:
+            F, Q = cv_matrices(dt, c.q, self.d)
         x, P = kalman.predict(state.x, state.P, F, Q)
         return predicted(state, tt, x, P, {"F": np.broadcast_to(F, P.shape)})
 

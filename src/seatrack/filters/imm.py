@@ -57,6 +57,7 @@ from seatrack.filters.base import (
 )
 from seatrack.models.measurement import Position, RangeRate, Stacked
 from seatrack.models.motion import MotionModel
+from seatrack.models.targets import TargetClass
 
 FloatArray = NDArray[np.float64]
 
@@ -69,6 +70,8 @@ __all__ = [
     "check_transition",
     "CVCTIMM",
     "CVCTIMMConfig",
+    "RangeRateIMM",
+    "RangeRateIMMConfig",
     "FilterIMM",
 ]
 
@@ -486,6 +489,31 @@ class CVCTIMMConfig:
         exclusive_min=True,
     )
     use_range_rate: bool = param(False, doc="stack the range rate with the converted position")
+    sigma_accel_cv: float = param(
+        0.0, key="sigma_accel_cv_mps2", unit="m/s^2",
+        doc="CV: acceleration std whose PSD a^2 T is added to q_cv (a target sets it)", min=0,
+    )  # fmt: skip
+    sigma_accel_ct: float = param(
+        0.0, key="sigma_accel_ct_mps2", unit="m/s^2",
+        doc="CT: acceleration std whose PSD a^2 T is added to q_ct (a target sets it)", min=0,
+    )  # fmt: skip
+
+    @classmethod
+    def for_target(cls, target: TargetClass) -> Any:
+        """A target class's noise: the CV model at the straight-leg acceleration, the CT
+        model at the tangential acceleration plus the mismatch of a constant turn rate over
+        a scan (half the typical manoeuvre acceleration), the turn rate wandering by its
+        typical value over a manoeuvre time; the class's maximum speed and turn rate as
+        the initial stds."""
+        return cls(
+            q_cv=0.0,
+            q_ct=0.0,
+            sigma_accel_cv=target.accel_steady,
+            sigma_accel_ct=math.hypot(target.accel_tangential, 0.5 * target.accel_typical),
+            q_omega=target.q_turn_rate,
+            initial_speed_sigma=target.speed_max,
+            initial_turn_rate_sigma=target.turn_rate_max,
+        )
 
 
 class CVCTIMM:
@@ -515,8 +543,8 @@ class CVCTIMM:
         self.d = d
         self.range_rate = bool(range_rate and c.use_range_rate)
         models: list[Any] = [
-            ConstantVelocity(q=c.q_cv, d=d),
-            CoordinatedTurn(q=c.q_ct, q_omega=c.q_omega, d=d),
+            ConstantVelocity(q=c.q_cv, d=d, accel=c.sigma_accel_cv),
+            CoordinatedTurn(q=c.q_ct, q_omega=c.q_omega, d=d, accel=c.sigma_accel_ct),
         ]
         pos = tuple(range(d))
         meas: list[Any] = []
@@ -601,6 +629,25 @@ class CVCTIMM:
         cols["p_ct"] = state.aux["mu"][:, 1]
         cols["turn_rate_dps"] = np.degrees(state.aux["X"][:, 1, self._w])
         return cols
+
+
+@dataclass(frozen=True)
+class RangeRateIMMConfig(CVCTIMMConfig):
+    """Parameters of ``--method mm-rangerate``: the CV + CT IMM with the range rate in the
+    update; ``q_ct = 1000`` and ``q_omega = 1e-3`` were chosen on the tuning seeds of the
+    fighter family (``benchmarks/defaults.py``; the IMM's own ``q_ct = 100`` makes range
+    rate a loss there)."""
+
+    q_ct: float = param(1000.0, unit="m^2/s^3", doc="CT white-noise acceleration PSD", min=0)
+    use_range_rate: bool = param(True, doc="stack the range rate with the converted position")
+
+
+class RangeRateIMM(CVCTIMM):
+    """``--method mm-rangerate``: the multiple-model filter with range rate where it helps,
+    in the state update of an IMM (CV + coordinated turn) -- see ``docs/multimodel.md``."""
+
+    Config = RangeRateIMMConfig
+    needs_range_rate: ClassVar[bool] = True
 
 
 class FilterIMM:

@@ -77,6 +77,7 @@ from seatrack.filters.base import (
 )
 from seatrack.filters.multimodel_kernel import step_kernel
 from seatrack.geometry import G0
+from seatrack.models.targets import TargetClass
 
 FloatArray = NDArray[np.float64]
 
@@ -515,6 +516,18 @@ class MultiModelTrackConfig:
         choices=("independent", "joint"),
         doc="range-rate likelihood: the spec's product, or the exact joint (mm-rangerate)",
     )
+
+    @classmethod
+    def for_target(cls, target: TargetClass) -> Any:
+        """What the patent leaves open, from a target class: hypotheses at the class's typical
+        manoeuvre acceleration, white acceleration a quarter of it (the residual of a
+        turn's rotating acceleration between hypotheses), the class's maximum speed as the
+        initial speed std."""
+        return cls(
+            accel=target.accel_typical,
+            sigma_accel=0.25 * target.accel_typical,
+            initial_speed_sigma=target.speed_max,
+        )
 
 
 @dataclass(frozen=True)

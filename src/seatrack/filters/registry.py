@@ -17,7 +17,11 @@ one over every labelled track of a set of plots, all tracks as one batch per ste
 that ``--help`` stays fast.
 
 The sensor section (:class:`~seatrack.filters.base.SensorNoise`) is shared by every
-method with one documented default; a method that has no use for a sensor key (e.g. range
+method with one documented default; so is the ``target`` key (``ship``, ``submarine``,
+``aircraft``, ``fighter``: :mod:`seatrack.models.targets`), which gives every method the
+process noise and manoeuvre parameters of the class (``Config.for_target``; keys given
+beside it win). Without a target the methods built on the level IMM tune their process
+noise online (:mod:`seatrack.filters.levels`); a method that has no use for a sensor key (e.g. range
 rate in a method that ignores it) accepts and ignores it, so one configuration describing
 the sensor drives any method.
 """
@@ -27,7 +31,7 @@ from __future__ import annotations
 import importlib
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -42,6 +46,9 @@ from seatrack.filters.base import (
     run_tracks,
 )
 
+if TYPE_CHECKING:
+    from seatrack.models.targets import TargetClass
+
 __all__ = [
     "METHODS",
     "COMMON_COLUMNS",
@@ -49,61 +56,79 @@ __all__ = [
     "Method",
     "method_class",
     "split_config",
+    "split_target",
+    "TARGET_KEY",
     "build",
     "run",
     "track_index",
     "describe_method",
 ]
 
-#: method name -> (module, class, one-line description)
+_LV = "seatrack.filters.levels"
+_RT = "seatrack.filters.robust_track"
+_MM = "seatrack.filters.multimodel"
+
+#: method name -> (module, class, one-line description). A ``-spec`` name runs a method
+#: exactly as its source describes; the name without it is the best version of the same
+#: idea (docs/turning.md, docs/robust.md, docs/multimodel.md give the departures and the
+#: evidence).
 METHODS: dict[str, tuple[str, str, str]] = {
-    "ekf": ("seatrack.filters.ekf", "EKF", "constant-velocity EKF on polar plots"),
-    "robust": (
-        "seatrack.filters.robust_track",
-        "Robust",
-        "Ramazanov robust beam-frame filter (algorithm R), 2-D range/bearing",
+    "ekf": ("seatrack.filters.ekf", "EKF", "constant-velocity EKF on polar plots (fixed q)"),
+    "imm": ("seatrack.filters.imm", "CVCTIMM", "standard IMM, CV + coordinated turn"),
+    "turning": (
+        "seatrack.filters.turning_imm",
+        "TurningLevels",
+        "turning-target filter: turn decision as a mode probability (level IMM), heading "
+        "filter and fuzzy vote for the output",
     ),
+    "turning-spec": (
+        "seatrack.filters.turning",
+        "Turning",
+        "CN 104407337 as written: CV-EKF, Q raised by a fuzzy turn-rate vote",
+    ),
+    "robust": (_LV, "RamazanovLevels", "algorithm R's robust update in a level IMM, 2-D"),
+    "robust-spec": (_RT, "Robust", "Ramazanov algorithm R as written (beam frame), 2-D"),
     "robust-adaptive": (
-        "seatrack.filters.robust_track",
+        _LV,
+        "ContaminatedLevels",
+        "robust and adaptive: level IMM with the exact contaminated-Gaussian update",
+    ),
+    "robust-adaptive-spec": (
+        _RT,
         "RobustAdaptive",
-        "Ramazanov adaptive-robust beam-frame filter (algorithm A), 2-D range/bearing",
+        "Ramazanov algorithm A as written (beam frame, injected P/3, P/10), 2-D",
     ),
-    "huber": (
-        "seatrack.filters.robust_track",
-        "Huber",
-        "Huber M-estimation EKF (IRLS), 2-D range/bearing",
-    ),
-    "student-t": (
-        "seatrack.filters.robust_track",
-        "StudentT",
-        "variational-Bayes Student-t EKF, 2-D range/bearing",
-    ),
+    "huber": (_LV, "HuberLevels", "Huber M-estimation update in a level IMM, 2-D"),
+    "student-t": (_LV, "StudentTLevels", "VB Student-t update in a level IMM, 2-D"),
     "ekf-rb": (
-        "seatrack.filters.robust_track",
+        _RT,
         "RangeBearingEKF",
         "2-D range/bearing CV EKF with outlier diagnostics (baseline of robust)",
     ),
-    "turning": (
-        "seatrack.filters.turning",
-        "Turning",
-        "turning-target CV-EKF, Q raised by a fuzzy turn-rate vote (CN 104407337)",
+    "mm": (
+        _LV,
+        "LevelIMM",
+        "multiple-model filter: IMM of process-noise levels (self-tuning), position only",
+    ),
+    "mm-spec": (
+        _MM,
+        "MultiModel",
+        "Gholson & Moose bank as in JP H06-95138's prior art: 10 g hypotheses, position only",
     ),
     "mm-rangerate": (
-        "seatrack.filters.multimodel",
-        "MultiModelRangeRate",
-        "multiple-model filter, reliabilities from position and range rate (JP H06-95138)",
-    ),
-    "mm": (
-        "seatrack.filters.multimodel",
-        "MultiModel",
-        "multiple-model filter, position-only reliabilities (Gholson & Moose prior art)",
-    ),
-    "imm": (
         "seatrack.filters.imm",
-        "CVCTIMM",
-        "standard IMM, CV + coordinated turn",
+        "RangeRateIMM",
+        "multiple-model filter with range rate in the update (IMM, CV + coordinated turn)",
+    ),
+    "mm-rangerate-spec": (
+        _MM,
+        "MultiModelRangeRate",
+        "JP H06-95138 as written: reliabilities from position and range rate",
     ),
 }
+
+#: the key of the target class every method accepts (``ship``, ``submarine``, ...)
+TARGET_KEY = "target"
 
 #: the sensor keys every method accepts (flat or in a ``[sensor]`` table)
 SENSOR_KEYS = tuple(k for k, name in config_keys(SensorNoise).items() if k != name)
@@ -135,6 +160,27 @@ def split_config(
                 raise ConfigError(f"{source}: {key} is given both flat and in [sensor]")
             out[key] = tab.pop(key)
     return out, tab
+
+
+def split_target(
+    table: Mapping[str, Any], source: str = "config"
+) -> tuple[TargetClass | None, dict[str, Any]]:
+    """The target class named by the ``target`` key (None without one) and the other keys.
+
+    A class sets the method's process noise and manoeuvre parameters (each method's
+    ``Config.for_target``); keys given beside it override the class's values.
+    """
+    from seatrack.models.targets import TARGET_CLASSES
+
+    tab = dict(table)
+    if TARGET_KEY not in tab:
+        return None, tab
+    value = tab.pop(TARGET_KEY)
+    if not isinstance(value, str) or value not in TARGET_CLASSES:
+        raise ConfigError(
+            f"{source}: {TARGET_KEY}: must be one of {', '.join(TARGET_CLASSES)}, got {value!r}"
+        )
+    return TARGET_CLASSES[value], tab
 
 
 @dataclass(frozen=True)
@@ -170,11 +216,14 @@ def build(
     """
     cls = method_class(name)
     sensor_tab, method_tab = split_config(table, source)
+    target, method_tab = split_target(method_tab, source)
+    base = cls.Config.for_target(target) if target is not None else None
     try:
-        cfg = parse_config(cls.Config, method_tab, source=source)
+        cfg = parse_config(cls.Config, method_tab, source=source, base=base)
     except ConfigError as exc:
         if "unknown key" in str(exc):
-            raise ConfigError(f"{exc}; sensor keys: {', '.join(SENSOR_KEYS)}") from None
+            extra = ", ".join((*SENSOR_KEYS, TARGET_KEY))
+            raise ConfigError(f"{exc}; sensor keys: {extra}") from None
         raise
     sensor = parse_config(SensorNoise, sensor_tab, source=source)
     if getattr(cls, "needs_range_rate", False) and not range_rate:

@@ -29,6 +29,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -288,17 +289,20 @@ def _reweighted(
     weights: Callable[[FloatArray, UpdateResult], tuple[FloatArray, NDArray[np.bool_]]],
     prior_first: bool,
     check: bool,
+    update: Callable[..., Any] = extended_update,
 ) -> tuple[UpdateResult, NDArray[np.bool_]]:
     """Iteratively reweighted EKF update: ``R = diag(r_nom / w)`` with weights ``w`` from the
     residuals ``e`` (the innovation first when ``prior_first``, else the residual at the
-    plain update's estimate); returns the last update and the last weights' flags."""
-    res = extended_update(x, P, zn, hx, H, R, _ANGULAR, check)
+    plain update's estimate); returns the last update and the last weights' flags.
+    ``update`` is the Kalman update used (signature and result fields ``x``, ``P``, ``y`` of
+    :func:`seatrack.kalman.extended_update`)."""
+    res = update(x, P, zn, hx, H, R, _ANGULAR, check)
     y = res.y  # innovation (bearing wrapped)
     flags = np.zeros(x.shape[:-1] + (2,), dtype=bool)
     for i in range(iterations):
         e = y if (prior_first and i == 0) else y - np.einsum("...ij,...j->...i", H, res.x - x)
         w, flags = weights(e, res)
-        res = extended_update(x, P, zn, hx, H, _diag(r_nom / w), _ANGULAR, check)
+        res = update(x, P, zn, hx, H, _diag(r_nom / w), _ANGULAR, check)
     return res, flags
 
 
@@ -312,6 +316,7 @@ def huber_update(
     r_nom: FloatArray,
     config: HuberConfig,
     check: bool = True,
+    update: Callable[..., Any] = extended_update,
 ) -> tuple[UpdateResult, NDArray[np.bool_]]:
     """The Huber IRLS measurement update of :func:`huber_filter` (flags: weight < 1)."""
 
@@ -320,7 +325,7 @@ def huber_update(
         w = np.minimum(1.0, config.c / np.maximum(u, 1e-300))
         return w, w < 1.0
 
-    return _reweighted(x, P, zn, hx, H, R, r_nom, config.iterations, weights, True, check)
+    return _reweighted(x, P, zn, hx, H, R, r_nom, config.iterations, weights, True, check, update)
 
 
 def student_t_filter(
@@ -353,6 +358,7 @@ def student_t_update(
     r_nom: FloatArray,
     config: StudentTConfig,
     check: bool = True,
+    update: Callable[..., Any] = extended_update,
 ) -> tuple[UpdateResult, NDArray[np.bool_]]:
     """The VB Student-t measurement update of :func:`student_t_filter` (flags: expected
     normalised squared residual > ``flag_threshold``)."""
@@ -367,4 +373,4 @@ def student_t_update(
             lam = np.repeat(((nu + 2.0) / (nu + a.sum(-1)))[..., None], 2, -1)
         return lam, a > config.flag_threshold
 
-    return _reweighted(x, P, zn, hx, H, R, r_nom, config.iterations, weights, False, check)
+    return _reweighted(x, P, zn, hx, H, R, r_nom, config.iterations, weights, False, check, update)

@@ -59,6 +59,7 @@ from seatrack.filters.robust_baselines import (
 )
 from seatrack.geometry import angle_diff, rotation_to_beam
 from seatrack.models.measurement import polar_measurement
+from seatrack.models.targets import TargetClass
 
 FloatArray = NDArray[np.float64]
 
@@ -87,6 +88,12 @@ class SonarMotionConfig:
     init_sigma_acc: float = param(
         0.2, unit="m/s^2", doc="acceleration std of a new track", min=0, exclusive_min=True
     )
+
+    @classmethod
+    def for_target(cls, target: TargetClass) -> Any:
+        """A target class's noise: the disturbance ``L0`` at the class's typical manoeuvre
+        acceleration, its maximum speed as the initial speed std."""
+        return cls(sigma_a=target.accel_typical, initial_speed_sigma=target.speed_max)
 
     def sonar_model(self, sensor: SensorNoise) -> SonarModel:
         return SonarModel(

@@ -76,6 +76,7 @@ from seatrack.geometry import bearing
 from seatrack.models import RangeBearing, RangeBearingElevation
 from seatrack.models.measurement import polar_measurement
 from seatrack.models.motion import cv_matrices, cv_noise, cv_transition
+from seatrack.models.targets import TargetClass
 
 FloatArray = NDArray[np.float64]
 
@@ -100,6 +101,7 @@ __all__ = [
     "push_turn_rate",
     "fuzzy_vote",
     "noise_gain",
+    "heading_columns",
 ]
 
 
@@ -151,6 +153,9 @@ class TurningConfig:
         ``c = clip((delta_omega / gain_reference) ** gain_power, 1, gain_max)`` ([reading]
         formula missing; default ``(delta_omega / 0.02)^2`` capped at 100);
         ``gain_reference`` key ``gain_reference_dps``.
+    sigma_accel : [``sigma_accel_mps2``] the nominal noise as an acceleration std, m/s^2:
+        ``q = sigma_accel^2 T`` at each scan (overrides ``q``; a ``target`` class sets it,
+        :meth:`for_target`).
     """
 
     q_nominal: float = param(
@@ -183,6 +188,22 @@ class TurningConfig:
     )  # fmt: skip
     gain_power: float = param(2.0, doc="S5 gain power", min=0)
     gain_max: float = param(100.0, doc="S5 gain cap (>= 1)", min=1)
+    sigma_accel: float | None = param(
+        None, key="sigma_accel_mps2", unit="m/s^2",
+        doc="nominal noise as an acceleration std, q = a^2 T (set by a target; overrides q)",
+        min=0, exclusive_min=True,
+    )  # fmt: skip
+
+    @classmethod
+    def for_target(cls, target: TargetClass) -> TurningConfig:
+        """What the patent leaves open, from a target class: the nominal (narrow-band) noise
+        of straight legs ``a_steady^2 T``, the initial speed std (the class's maximum speed)
+        and turn-rate std (its maximum turn rate)."""
+        return cls(
+            sigma_accel=target.accel_steady,
+            sigma_velocity0=target.speed_max,
+            sigma_omega0=target.turn_rate_max,
+        )
 
     def __post_init__(self) -> None:
         positive = (
@@ -495,22 +516,27 @@ class Turning:
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
         st = TrackState.new(t, x, P)
         B = len(st)
-        nan = np.full(B, np.nan)
-        aux = {
+        aux = self.heading_aux(B) | {"gain": np.ones(B), "q_gain": np.ones(B)}
+        return st.replace(aux=aux | self.heading_logic(st.replace(aux=aux)))
+
+    def heading_aux(self, B: int) -> dict[str, Any]:
+        """Initial (empty) heading filter and turn-rate queue of ``B`` tracks."""
+        return {
             "hs": np.zeros((B, 2)),
             "hP": np.zeros((B, 2, 2)),
-            "ht": nan,
+            "ht": np.full(B, np.nan),
             "queue": np.full((B, self.config.queue_length), np.nan),
             "qn": np.zeros(B, np.int64),
-            "gain": np.ones(B),
-            "q_gain": np.ones(B),
         }
-        return st.replace(aux=aux | self._turn_logic(st.replace(aux=aux)))
 
     def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
         tt, dt = step_times(state, t)
         gain = state.aux["gain"]
-        F, Q = cv_matrices(dt, self.config.q_nominal, self.d)
+        c = self.config
+        if c.sigma_accel is None:
+            F, Q = cv_matrices(dt, c.q_nominal, self.d)
+        else:  # q = a^2 T each scan (a target class)
+            F, Q = cv_transition(dt, self.d), cv_noise(dt, c.sigma_accel**2 * dt, self.d)
         x, P = kalman.predict(state.x, state.P, F, Q * gain[:, None, None])
         return predicted(state, tt, x, P, {"q_gain": gain, "gain": np.ones(len(state))})
 
@@ -530,11 +556,12 @@ class Turning:
             res = kalman.extended_update(
                 state.x, state.P, z, hx, H, self.R, self._angular, check=False
             )
-            aux = self._turn_logic(state.replace(x=res.x, P=res.P))
+            aux = self.heading_logic(state.replace(x=res.x, P=res.P))
         return finish_update(state, res.x, res.P, res.nis, res.log_likelihood, state.t, aux, ok)
 
-    def _turn_logic(self, st: TrackState) -> dict[str, Any]:
-        """S2-S5 on the filtered states of a batch (compiled: :func:`turn_logic`)."""
+    def heading_logic(self, st: TrackState) -> dict[str, Any]:
+        """S2-S5 on the filtered states of a batch (compiled: :func:`turn_logic`): the new
+        heading filter, queue, decision ``turn_state`` and gain for the next prediction."""
         c, d, a = self.config, self.d, st.aux
         B = len(st)
         hs, hP, ht = a["hs"].copy(), a["hP"].copy(), a["ht"].copy()
@@ -554,19 +581,27 @@ class Turning:
         }  # fmt: skip
 
     def columns(self, state: TrackState) -> dict[str, NDArray[Any]]:
-        a, d = state.aux, self.d
-        cols: dict[str, NDArray[Any]] = dict(common_columns(state.x, state.P, d))
-        v = state.x[:, d:]
-        started = np.isfinite(a["ht"])
-        labels = np.array([s.label for s in TurnState])
-        cols["speed_mps"] = np.hypot(v[:, 0], v[:, 1])
-        cols["heading_deg"] = np.degrees(bearing(v[:, 0], v[:, 1]))
-        cols["turn_rate_dps"] = np.degrees(np.where(started, a["hs"][:, 1], np.nan))
-        std = np.sqrt(np.maximum(a["hP"][:, 1, 1], 0.0))
-        cols["turn_rate_std_dps"] = np.degrees(np.where(started, std, np.nan))
-        cols["turn_state"] = labels[a["turn_state"]]
-        cols["q_gain"] = a["q_gain"]
+        cols: dict[str, NDArray[Any]] = dict(common_columns(state.x, state.P, self.d))
+        cols |= heading_columns(state, self.d)
+        cols["q_gain"] = state.aux["q_gain"]
         return cols
+
+
+def heading_columns(state: TrackState, d: int) -> dict[str, NDArray[Any]]:
+    """S6 output columns of a batch: speed, heading, the heading filter's turn rate and its
+    std (NaN until it starts), the fuzzy vote's ``turn_state``."""
+    a = state.aux
+    v = state.x[:, d:]
+    started = np.isfinite(a["ht"])
+    labels = np.array([s.label for s in TurnState])
+    std = np.sqrt(np.maximum(a["hP"][:, 1, 1], 0.0))
+    return {
+        "speed_mps": np.hypot(v[:, 0], v[:, 1]),
+        "heading_deg": np.degrees(bearing(v[:, 0], v[:, 1])),
+        "turn_rate_dps": np.degrees(np.where(started, a["hs"][:, 1], np.nan)),
+        "turn_rate_std_dps": np.degrees(np.where(started, std, np.nan)),
+        "turn_state": labels[a["turn_state"]],
+    }
 
 
 class TurningFilter:

@@ -23,7 +23,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import ClassVar, Protocol
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 from numba import guvectorize, njit
@@ -48,6 +48,7 @@ __all__ = [
     "ct_jacobian",
     "ct_noise",
     "ct_predict",
+    "scan_psd",
 ]
 
 
@@ -280,8 +281,20 @@ def _ct_predict_kernel(x, P, T, q, q_omega, xo, Po):  # pragma: no cover - compi
     _ct_predict_core(x, P, T, q, q_omega, xo, Po)
 
 
+def scan_psd(q: ArrayLike, accel: float, dt: ArrayLike) -> Any:
+    """White-acceleration PSD of a scan of length ``dt``: ``q + accel^2 dt`` (m^2/s^3).
+
+    ``accel^2 T`` makes the velocity variance added per scan that of an acceleration of
+    std ``accel`` over the scan (Bar-Shalom, Li & Kirubarajan 2001, sec. 6.3.2); a plain
+    ``q`` (``accel = 0``) is returned unchanged.
+    """
+    if accel == 0.0:
+        return q
+    return np.asarray(q, dtype=float) + accel**2 * np.asarray(dt, dtype=float)
+
+
 def ct_predict(
-    x: ArrayLike, P: ArrayLike, dt: ArrayLike, q: float, q_omega: float
+    x: ArrayLike, P: ArrayLike, dt: ArrayLike, q: ArrayLike, q_omega: float
 ) -> tuple[FloatArray, FloatArray]:
     """Compiled coordinated-turn EKF prediction over leading dimensions: ``(f(x), F P F^T +
     Q)`` with ``F`` = :func:`ct_jacobian` and ``Q`` = :func:`ct_noise`."""
@@ -365,14 +378,18 @@ class ConstantVelocity(_Polynomial):
         Acceleration power spectral density, m^2/s^3 (``q = sigma_a^2 * tau`` roughly).
     d : int
         Spatial dimensions (2 or 3).
+    accel : float
+        An acceleration std ``a`` (m/s^2) whose PSD ``a^2 T`` is added at each scan of
+        length ``T`` (:func:`scan_psd`; a target class's levels), default 0.
     """
 
     q: float = 0.1
     d: int = 2
+    accel: float = 0.0
     _order: ClassVar[int] = 1
 
     def noise(self, dt: ArrayLike) -> FloatArray:
-        return cv_noise(dt, self.q, self.d)
+        return cv_noise(dt, scan_psd(self.q, self.accel, dt), self.d)
 
 
 @dataclass(frozen=True)
@@ -399,11 +416,14 @@ class CoordinatedTurn:
         Turn-rate random-walk PSD, rad^2/s^3.
     d : int
         2 (state ``[x, y, vx, vy, w]``) or 3 (``[x, y, z, vx, vy, vz, w]``).
+    accel : float
+        As :class:`ConstantVelocity`: PSD ``accel^2 T`` added at each scan, m/s^2.
     """
 
     q: float = 0.1
     q_omega: float = 1e-4
     d: int = 2
+    accel: float = 0.0
 
     #: the turn rate makes the transition depend on the state
     is_linear: ClassVar[bool] = False
@@ -428,8 +448,8 @@ class CoordinatedTurn:
         return ct_transition(x, dt), ct_jacobian(x, dt)
 
     def noise(self, dt: ArrayLike) -> FloatArray:
-        return ct_noise(dt, self.q, self.q_omega, self.d)
+        return ct_noise(dt, scan_psd(self.q, self.accel, dt), self.q_omega, self.d)
 
     def predict(self, x: ArrayLike, P: ArrayLike, dt: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """EKF prediction of ``(x, P)`` over ``dt`` in one compiled call (:func:`ct_predict`)."""
-        return ct_predict(x, P, dt, self.q, self.q_omega)
+        return ct_predict(x, P, dt, scan_psd(self.q, self.accel, dt), self.q_omega)

@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-__all__ = ["track_figure", "error_figure", "save"]
+__all__ = ["track_figure", "error_figure", "situation_figure", "ais_figure", "save"]
 
 
 def _figure(size: tuple[float, float]) -> Any:
@@ -168,6 +168,79 @@ def error_figure(
         ax.set_yscale("log")
         ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         ax.yaxis.set_minor_formatter(FuncFormatter(minor))
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    if title:
+        ax.set_title(title)
+    return fig
+
+
+def situation_figure(
+    truth: ArrayLike,
+    estimates: Mapping[str, ArrayLike],
+    plots: ArrayLike | None,
+    t: ArrayLike,
+    title: str = "",
+    plots_label: str = "plots",
+) -> Any:
+    """Two panels: the plan view (truth, plots, estimates; km) and each estimate's position
+    error against time (m; moving RMS over about 1/60 of the run).
+
+    Parameters
+    ----------
+    truth : (N, 2+) true positions at the times ``t`` (N,), m
+    estimates : label -> (N, 2+) estimated positions at the same times, m
+    plots : (K, 2+) plot positions (or landmarks), m
+    """
+    fig = _figure((11.0, 4.6))
+    ax, ae = fig.add_subplot(1, 2, 1), fig.add_subplot(1, 2, 2)
+    tr = np.asarray(truth, dtype=float)[:, :2]
+    if plots is not None and np.size(plots):
+        p = _xy(plots)
+        ax.plot(p[:, 0], p[:, 1], "+", color="0.6", ms=3, label=plots_label)
+    ax.plot(tr[:, 0] / 1e3, tr[:, 1] / 1e3, "k-", lw=2, label="truth")
+    tt = np.asarray(t, dtype=float)
+    w = max(1, tt.size // 60)  # moving RMS over about 1/60 of the run
+    kernel = np.ones(w) / w
+    for label, est in estimates.items():
+        e = np.asarray(est, dtype=float)[:, :2]
+        (line,) = ax.plot(e[:, 0] / 1e3, e[:, 1] / 1e3, lw=1.2, label=label)
+        err2 = np.convolve(np.sum((e - tr) ** 2, -1), kernel, mode="same")
+        ae.plot(tt, np.sqrt(err2), lw=1.2, color=line.get_color(), label=label)
+    ax.set_xlabel("East (km)")
+    ax.set_ylabel("North (km)")
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.legend(loc="best", fontsize=8)
+    ae.set_xlabel("time (s)")
+    ae.set_ylabel("position error, moving RMS (m)")
+    ae.set_yscale("log")
+    for a in (ax, ae):
+        a.grid(True, alpha=0.3)
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def ais_figure(reports: Any, tracks: Any, title: str = "") -> Any:
+    """Plan view (longitude, latitude) of AIS reports (grey), the smoothed tracks (one
+    colour per vessel) and the reports flagged as outliers (red crosses).
+
+    ``reports`` / ``tracks``: :class:`~seatrack.io.ais.AisReports` and the tracker's
+    :class:`~seatrack.filters.ais.AisTracks` (one entry per report row).
+    """
+    fig = _figure((8.0, 6.0))
+    ax = fig.add_subplot(1, 1, 1)
+    ax.plot(reports.lon, reports.lat, ".", color="0.7", ms=3, label="reports")
+    for k, m in enumerate(np.unique(reports.mmsi[reports.mmsi >= 0])):
+        sel = reports.mmsi == m
+        ax.plot(
+            tracks.lon[sel], tracks.lat[sel], lw=1.2, label="smoothed tracks" if k == 0 else None
+        )
+    out = np.asarray(tracks.outlier, dtype=bool)
+    ax.plot(reports.lon[out], reports.lat[out], "x", color="red", ms=8, mew=2,
+            label=f"outliers ({int(out.sum())})")  # fmt: skip
+    ax.set_xlabel("longitude (deg)")
+    ax.set_ylabel("latitude (deg)")
     ax.grid(True, alpha=0.3)
     ax.legend(loc="best", fontsize=8)
     if title:

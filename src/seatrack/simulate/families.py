@@ -37,8 +37,10 @@ Plots are 2-D (range, azimuth[, range rate]); x East, y North; SI units and radi
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -70,6 +72,7 @@ __all__ = [
     "ais_replay",
     "random_manoeuvres",
     "weaving",
+    "labelled_runs",
 ]
 
 DEG = math.pi / 180.0
@@ -497,3 +500,18 @@ def weaving(target: str, seed: int, epsilon: float = 0.0) -> Scenario:
     )  # fmt: skip
     obs = _observer(spec, t, rng)
     return _observe("weaving", target, seed, traj, obs, spec.sensor, epsilon, t >= t0, rng)
+
+
+def labelled_runs(scenarios: Sequence[Scenario]) -> Plots:
+    """The plots of several runs as ONE labelled set (track ``r<i>`` = run ``i``), as
+    ``seatrack track`` reads a file of many tracks: every run goes through a method in
+    the same batch."""
+    parts = [s.plots for s in scenarios]
+
+    def cat(name: str) -> Any:
+        vals = [getattr(p, name) for p in parts]
+        return None if vals[0] is None else np.concatenate(vals)
+
+    labels = np.concatenate([np.full(len(p), f"r{i}") for i, p in enumerate(parts)])
+    fields = ("t", "range", "azimuth", "elevation", "range_rate", "sensor", "sensor_vel")
+    return Plots(**{f: cat(f) for f in fields}, track=labels)

@@ -1,0 +1,262 @@
+"""The process-noise-level IMM (seatrack.filters.levels): its pure functions against
+independent computations, its limits (one level = the EKF; epsilon = 0 = the Gaussian
+update), the densities of the robust rules, and the behaviour it exists for (an outlier
+barely moves the level probabilities, a manoeuvre moves them)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from scipy import integrate, stats
+
+from seatrack import kalman
+from seatrack.config import ConfigError, parse_config
+from seatrack.filters import registry
+from seatrack.filters.base import Plots, SensorNoise, plot_gaussian, run_tracks
+from seatrack.filters.levels import (
+    LADDER,
+    ContaminatedConfig,
+    ContaminatedLevels,
+    HuberLevels,
+    LevelConfig,
+    LevelIMM,
+    LevelIMMConfig,
+    StudentTLevels,
+    contaminated_loglik,
+    level_noise,
+    mixture_update,
+    outlier_patterns,
+)
+from seatrack.models.targets import AIRCRAFT, SHIP
+from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+
+SENSOR = SensorNoise(10.0, math.radians(0.3))
+
+
+def _plots(legs, speed=8.0, dt=2.5, n=200, seed=1, start=(4e3, 3e3), epsilon=0.0, course=1.0):
+    rng = np.random.default_rng(seed)
+    times = dt * np.arange(n)
+    tr = trajectory(list(start), course, speed, legs, times=times)
+    noise = NoiseModel([SENSOR.sigma_range, SENSOR.sigma_azimuth], epsilon, (10.0, 25.0))
+    m = observe(tr, None, ("range", "azimuth"), noise, rng)
+    plots = Plots(tr.t, m.z[:, 0], m.z[:, 1], sensor=m.sensor_pos, sensor_vel=m.sensor_vel)
+    return plots, tr, m
+
+
+def _run(flt, plots, speed_sigma=20.0):
+    ti = np.zeros(len(plots), np.int64)
+    return run_tracks(flt, plots, ti, lambda p: plot_gaussian(p, SENSOR, speed_sigma, False))
+
+
+def test_level_noise_ladder_and_target_levels():
+    dt = np.array([2.0, 4.0])
+    q, PI = level_noise(LevelConfig(), dt)
+    assert np.allclose(q, np.broadcast_to(LADDER, (2, 5)))
+    assert np.allclose(PI.sum(-1), 1.0) and np.allclose(np.diagonal(PI, 0, 1, 2), 0.95)
+    cfg = LevelConfig.for_target(AIRCRAFT)
+    q, PI = level_noise(cfg, dt)
+    assert np.allclose(q[1], np.square([AIRCRAFT.accel_steady, AIRCRAFT.accel_max]) * 4.0)
+    assert np.allclose(PI[1, 0, 0], math.exp(-4.0 / AIRCRAFT.straight_time))
+    assert np.allclose(PI[1, 1, 1], math.exp(-4.0 / AIRCRAFT.manoeuvre_time))
+    assert np.allclose(PI.sum(-1), 1.0)
+    q, PI = level_noise(LevelConfig(q_levels=(3.0,)), dt)
+    assert q.shape == (2, 1) and np.all(PI == 1.0)
+
+
+@pytest.mark.parametrize(
+    "kw",
+    [
+        {"q_levels": ()},
+        {"q_levels": (1.0, -1.0)},
+        {"accel_levels": (0.1,), "sojourn_times": (10.0, 20.0)},
+        {"q_levels": (1.0, 2.0), "p_stay": 1.0},
+    ],
+)
+def test_level_config_errors(kw):
+    with pytest.raises(ValueError):
+        LevelConfig(**kw)
+
+
+def test_config_keys_parse_lists():
+    cfg = parse_config(LevelIMMConfig, {"q_levels": [0.1, 10.0], "p_stay": 0.9})
+    assert cfg.q_levels == (0.1, 10.0) and cfg.n_levels == 2
+    with pytest.raises(ConfigError, match="q_levels"):
+        parse_config(LevelIMMConfig, {"q_levels": [0.1, "x"]})
+
+
+def test_outlier_patterns_priors_sum_to_one():
+    G, logp = outlier_patterns(np.array([10.0, 25.0, 10.0]), 0.1)
+    assert G.shape == (8, 3) and math.isclose(np.exp(logp).sum(), 1.0)
+    assert math.isclose(np.exp(logp[0]), 0.9**3) and math.isclose(np.exp(logp[-1]), 1e-3)
+
+
+def test_contaminated_update_is_the_exact_posterior_in_one_dimension():
+    """Prior N(m, p), z = x + v, v ~ (1 - e) N(0, r) + e N(0, k r): mean, variance and
+    evidence by quadrature."""
+    m, p, r, k, e, z = 1.0, 4.0, 1.0, 25.0, 0.2, 6.5
+    G, logp = outlier_patterns(np.array([k]), e)
+    x, P, ll, out = mixture_update(
+        np.array([m]),
+        np.array([[p]]),
+        np.array([z - m]),
+        np.array([[1.0]]),
+        np.array([r]),
+        (G, logp, np.array([k])),
+    )
+
+    def joint(t):
+        noise = (1 - e) * stats.norm.pdf(z - t, 0, 1) + e * stats.norm.pdf(z - t, 0, 5)
+        return stats.norm.pdf(t, m, 2) * noise
+
+    ev = integrate.quad(joint, -60, 60, points=[m, z])[0]
+    mean = integrate.quad(lambda t: t * joint(t), -60, 60, points=[m, z])[0] / ev
+    var = integrate.quad(lambda t: (t - mean) ** 2 * joint(t), -60, 60, points=[m, z])[0] / ev
+    assert x[0] == pytest.approx(mean, rel=1e-6)
+    assert ll == pytest.approx(math.log(ev), abs=1e-6)
+    assert P[0, 0] == pytest.approx(var, rel=1e-6)
+    # the posterior outlier probability of the channel
+    w_out = e * stats.norm.pdf(z, m, math.sqrt(p + k * r))
+    w_in = (1 - e) * stats.norm.pdf(z, m, math.sqrt(p + r))
+    assert out[0] == pytest.approx(w_out / (w_in + w_out), rel=1e-9)
+
+
+def test_contaminated_loglik_matches_the_update():
+    rng = np.random.default_rng(2)
+    A = rng.normal(size=(3, 2, 2))
+    HPH = A @ np.swapaxes(A, -1, -2) + np.eye(2)
+    y = rng.normal(size=(3, 2)) * 3
+    r, k = np.array([1.0, 0.5]), np.array([10.0, 25.0])
+    G, logp = outlier_patterns(k, 0.1)
+    ll = contaminated_loglik(y, np.eye(2), HPH, r, (G, logp, k))
+    ref = []
+    for b in range(3):
+        dens = [
+            math.exp(lp) * stats.multivariate_normal.pdf(y[b], cov=HPH[b] + np.diag(r * k**g))
+            for g, lp in zip(G, logp, strict=True)
+        ]
+        ref.append(math.log(sum(dens)))
+    assert np.allclose(ll, ref)
+
+
+def test_one_level_without_outliers_is_the_ekf():
+    plots, _, _ = _plots([Leg.straight(200.0), Leg.turn_g(math.pi / 2, 0.05, 8.0),
+                          Leg.straight(1e4)])  # fmt: skip
+    one = LevelIMM(LevelIMMConfig(q_levels=(0.05,), outlier_probability=0.0), SENSOR)
+    ekf = registry.build("ekf", {"q": 0.05, "sigma_range_m": 10.0, "sigma_azimuth_deg": 0.3})
+    a, b = _run(one, plots), _run(ekf.filter, plots)
+    for c in ("x_m", "y_m", "vx_mps", "vy_mps", "std_x_m", "nis"):
+        assert np.allclose(a[c], b[c], rtol=1e-9, atol=1e-9, equal_nan=True), c
+
+
+def test_equal_times_predict_changes_nothing():
+    f = LevelIMM(LevelIMMConfig(), SENSOR)
+    x, P = plot_gaussian(_plots([Leg.straight(10.0)], n=2)[0].take([0]), SENSOR, 10.0, False)
+    st = f.initiate([5.0], x, P)
+    same = f.predict(st, [5.0])
+    assert np.array_equal(same.x, st.x) and np.array_equal(same.aux["mu"], st.aux["mu"])
+
+
+@pytest.mark.parametrize("cls", [HuberLevels, StudentTLevels])
+def test_robust_densities_integrate_to_one(cls):
+    f = cls(None, SENSOR)
+    val = integrate.quad(lambda u: math.exp(f._density(np.array([[u]]))[0]), -200, 200)[0]
+    assert val == pytest.approx(1.0, abs=1e-6)
+
+
+def _probabilities(flt, plots):
+    ti = np.zeros(len(plots), np.int64)
+    cols = run_tracks(flt, plots, ti, lambda p: plot_gaussian(p, SENSOR, 20.0, False))
+    return cols
+
+
+def test_manoeuvre_moves_the_probability_to_the_agile_level():
+    """A ship sails straight, turns 90 deg at 1.5 deg/s, sails straight: the agile level
+    of the class takes over during the turn and hands back after it."""
+    legs = [Leg.straight(400.0), Leg.turn(math.pi / 2, math.radians(1.5)), Leg.straight(1e4)]
+    plots, tr, _ = _plots(legs, n=400)
+    cfg = dataclasses.replace(LevelIMMConfig.for_target(SHIP), outlier_probability=0.0)
+    cols = _probabilities(LevelIMM(cfg, SENSOR), plots)
+    p = cols["p_manoeuvre"]
+    t = plots.t
+    turn = (t > 430.0) & (t < 460.0)
+    straight_before = (t > 200.0) & (t < 400.0)
+    long_after = t > 900.0
+    assert p[turn].mean() > 0.8
+    assert p[straight_before].mean() < 0.2 and p[long_after].mean() < 0.2
+
+
+def test_an_outlier_barely_moves_the_contaminated_levels():
+    """One wild azimuth plot on a straight leg: the Gaussian ladder jumps to its agile
+    levels, the contaminated one does not (and its track error stays small)."""
+    plots, tr, m = _plots([Leg.straight(1e4)], n=120)
+    az = plots.azimuth.copy()
+    az[80] += math.radians(3.0)  # 10 sigma
+    bad = dataclasses.replace(plots, azimuth=az)
+    cfg = ContaminatedConfig.for_target(SHIP)
+    gauss = _probabilities(LevelIMM(dataclasses.replace(cfg, outlier_probability=0.0), SENSOR),
+                           bad)  # fmt: skip
+    cont = _probabilities(ContaminatedLevels(cfg, SENSOR), bad)
+    assert gauss["p_manoeuvre"][80] > 0.7
+    assert cont["p_manoeuvre"][80] < 0.2
+    assert cont["outlier_bearing"][80] == 1 and cont["outlier_bearing"][:80].sum() <= 2
+    err_g = np.hypot(gauss["x_m"] - tr.pos[:, 0], gauss["y_m"] - tr.pos[:, 1])
+    err_c = np.hypot(cont["x_m"] - tr.pos[:, 0], cont["y_m"] - tr.pos[:, 1])
+    assert err_c[80] < 0.5 * err_g[80]
+
+
+def test_the_ladder_is_not_overconfident_on_a_straight_target():
+    """Monte-Carlo NEES (position and velocity, 4 dof) of the self-tuning ladder on a CV
+    target: below the upper 99 % chi-square bound of 30 runs (never overconfident); an IMM
+    whose levels include noise the target has not is conservative, but by less than 2x."""
+    nees = []
+    for seed in range(30):
+        plots, tr, _ = _plots([Leg.straight(1e4)], n=80, seed=100 + seed, speed=6.0)
+        f = LevelIMM(LevelIMMConfig(outlier_probability=0.0), SENSOR)
+        x0, P0 = plot_gaussian(plots.take([0]), SENSOR, 10.0, False)
+        st = f.initiate(plots.t[:1], x0, P0)
+        for k in range(1, len(plots)):
+            st = f.update(f.predict(st, plots.t[k : k + 1]), plots.take([k]))
+        truth = np.concatenate([tr.pos[-1, :2], tr.vel[-1, :2]])
+        e = st.x[0] - truth
+        nees.append(float(e @ np.linalg.solve(st.P[0], e)))
+    lo, hi = stats.chi2.ppf([0.005, 0.995], 4 * 30) / 30
+    assert lo / 2 < np.mean(nees) < hi
+
+
+def test_kalman_update_is_the_gaussian_rule():
+    """epsilon = 0: the compiled mixture update is the (Joseph-form) EKF update."""
+    f = LevelIMM(LevelIMMConfig(outlier_probability=0.0), SENSOR)
+    assert f.patterns is None
+    rng = np.random.default_rng(0)
+    X = np.tile([3e3, 4e3, 5.0, 1.0], (2, 5, 1)) + rng.normal(size=(2, 5, 4))
+    P = np.tile(np.diag([100.0, 100.0, 4.0, 4.0]), (2, 5, 1, 1))
+    z = np.array([[5e3, 0.64], [5.01e3, 0.65]])
+    from seatrack.models.measurement import polar_measurement
+
+    hx, H = polar_measurement(X.reshape(10, 4), np.zeros((10, 4)), 2)
+    res = f._rule(X, P, z, hx.reshape(2, 5, 2), H.reshape(2, 5, 2, 4))
+    ref = kalman.extended_update(X, P, z[:, None], hx.reshape(2, 5, 2), H.reshape(2, 5, 2, 4),
+                                 f.R, f.angular)  # fmt: skip
+    assert np.allclose(res.X, ref.x, rtol=1e-12, atol=1e-9)
+    assert np.allclose(res.P, ref.P, rtol=1e-9, atol=1e-9)
+    assert np.allclose(res.ll, ref.log_likelihood, rtol=1e-12)
+
+
+@pytest.mark.parametrize("epsilon, lo, hi", [(0.0, 0.0, 0.03), (0.2, 0.12, 0.3)])
+def test_the_outlier_probability_is_learnt(epsilon, lo, hi):
+    """robust-adaptive learns each channel's outlier rate: it falls on clean plots and
+    settles near the true 20 % on contaminated ones (8 tracks, 300 scans)."""
+    parts = [_plots([Leg.straight(1e4)], n=300, seed=50 + i, epsilon=epsilon)[0] for i in range(8)]
+    f = ContaminatedLevels(ContaminatedConfig(), SENSOR)
+    eps = []
+    for p in parts:
+        x0, P0 = plot_gaussian(p.take([0]), SENSOR, 10.0, False)
+        st = f.initiate(p.t[:1], x0, P0)
+        for k in range(1, len(p)):
+            st = f.update(f.predict(st, p.t[k : k + 1]), p.take([k]))
+        eps.append(st.aux["eps"][0])
+    mean = np.mean(eps, axis=0)
+    assert np.all((lo <= mean) & (mean <= hi)), mean

@@ -67,7 +67,6 @@ import numpy as np
 from seatrack.evaluate.montecarlo import format_table
 from seatrack.evaluate.multitarget import RunScores, score_run, summary_row
 from seatrack.filters.base import Plots, SensorNoise
-from seatrack.filters.ekf import EKF, EKFConfig
 from seatrack.simulate.multitarget import MultiTargetRun, TargetPopulation, simulate_multitarget
 from seatrack.simulate.scenarios import SensorConfig
 from seatrack.tracking import MultiTargetTracker, TrackerConfig
@@ -147,14 +146,23 @@ def score(run: MultiTargetRun, res: Result) -> RunScores:
 SENSOR = SensorNoise(sigma_range=SIGMA_R, sigma_azimuth=SIGMA_AZ)
 
 
-def run_seatrack(run: MultiTargetRun, config: TrackerConfig, q: float | None = None) -> Result:
-    """The tracker with the reference EKF; ``q`` None: process noise chosen automatically
-    (as ``seatrack track`` does), else this fixed PSD."""
-    given = set() if q is None else {"q"}
-    flt = per_track_filter(EKF, EKFConfig(q=q or 1.0), given, SENSOR, 2, False,
-                           scan_period(run.plots.t))  # fmt: skip
-    trk = MultiTargetTracker(flt, SENSOR, config)
-    out = trk.run(run.plots)
+#: the configuration ``seatrack track`` is given: the sensor's nominal noise only
+SENSOR_TABLE = {"sigma_range_m": SIGMA_R, "sigma_azimuth_deg": SIGMA_AZ / DEG}
+
+
+def run_seatrack(
+    run: MultiTargetRun, config: TrackerConfig, q: float | None = None, method: str = "ekf",
+    rule: str | None = None, table: dict[str, Any] | None = None,
+) -> Result:  # fmt: skip
+    """The tracker with per-track filter ``method`` (default the reference EKF); ``q``
+    None: process noise chosen automatically (as ``seatrack track`` does), else this fixed
+    PSD; ``rule`` overrides the automatic noise rule; ``table`` adds method keys."""
+    tab = {**SENSOR_TABLE, **(table or {})}
+    if q is not None:
+        tab["q"] = q
+    m, _ = per_track_filter(method, tab, 2, False, scan_period(run.plots.t), rule=rule)
+    trk = MultiTargetTracker(m.filter, SENSOR, config)
+    out = trk.run(m.prepare(run.plots))
     pos = np.stack([out.columns["x_m"], out.columns["y_m"]], -1) if out.t.size else np.zeros((0, 2))
     return Result(out.t, out.track, pos, out.seconds_per_scan, out.cpu_seconds_per_scan)
 

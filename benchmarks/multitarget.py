@@ -67,11 +67,10 @@ import numpy as np
 from seatrack.evaluate.montecarlo import format_table
 from seatrack.evaluate.multitarget import RunScores, score_run, summary_row
 from seatrack.filters.base import Plots, SensorNoise
-from seatrack.filters.ekf import EKF, EKFConfig
 from seatrack.simulate.multitarget import MultiTargetRun, TargetPopulation, simulate_multitarget
 from seatrack.simulate.scenarios import SensorConfig
 from seatrack.tracking import MultiTargetTracker, TrackerConfig
-from seatrack.tracking.auto import noise_levels, per_track_filter, scan_period
+from seatrack.tracking.auto import AUTO_NOISE, noise_levels, per_track_filter, scan_period
 from seatrack.tracking.gating import gate_threshold
 
 EVAL_SEED = 15_2026
@@ -147,14 +146,23 @@ def score(run: MultiTargetRun, res: Result) -> RunScores:
 SENSOR = SensorNoise(sigma_range=SIGMA_R, sigma_azimuth=SIGMA_AZ)
 
 
-def run_seatrack(run: MultiTargetRun, config: TrackerConfig, q: float | None = None) -> Result:
-    """The tracker with the reference EKF; ``q`` None: process noise chosen automatically
-    (as ``seatrack track`` does), else this fixed PSD."""
-    given = set() if q is None else {"q"}
-    flt = per_track_filter(EKF, EKFConfig(q=q or 1.0), given, SENSOR, 2, False,
-                           scan_period(run.plots.t))  # fmt: skip
-    trk = MultiTargetTracker(flt, SENSOR, config)
-    out = trk.run(run.plots)
+#: the configuration ``seatrack track`` is given: the sensor's nominal noise only
+SENSOR_TABLE = {"sigma_range_m": SIGMA_R, "sigma_azimuth_deg": SIGMA_AZ / DEG}
+
+
+def run_seatrack(
+    run: MultiTargetRun, config: TrackerConfig, q: float | None = None, method: str = "ekf",
+    rule: str | None = None, table: dict[str, Any] | None = None,
+) -> Result:  # fmt: skip
+    """The tracker with per-track filter ``method`` (default the reference EKF); ``q``
+    None: process noise chosen automatically (as ``seatrack track`` does), else this fixed
+    PSD; ``rule`` overrides the automatic noise rule; ``table`` adds method keys."""
+    tab = {**SENSOR_TABLE, **(table or {})}
+    if q is not None:
+        tab["q"] = q
+    m, _ = per_track_filter(method, tab, 2, False, scan_period(run.plots.t), rule=rule)
+    trk = MultiTargetTracker(m.filter, SENSOR, config)
+    out = trk.run(m.prepare(run.plots))
     pos = np.stack([out.columns["x_m"], out.columns["y_m"]], -1) if out.t.size else np.zeros((0, 2))
     return Result(out.t, out.track, pos, out.seconds_per_scan, out.cpu_seconds_per_scan)
 
@@ -354,13 +362,18 @@ def best_of(fn: Callable[[], Result], repeat: int) -> Result:
 # Tuning
 # ---------------------------------------------------------------------------
 def tune_seatrack(runs: list[MultiTargetRun]) -> None:
-    """Grids of the tracker parameters on the tuning runs (prints the mean GOSPA)."""
+    """Grids of the tracker parameters on the tuning runs, one at a time around the
+    defaults (prints the mean GOSPA of each value)."""
     base = TrackerConfig()
     grids: dict[str, list[Any]] = {
         "q": [None, 0.03, 0.1, 0.3],  # None: the automatic noise levels
-        "m_of_n": [(3, 3), (3, 4), (3, 5), (4, 5)],
+        "confirmation": ["existence", "m-of-n"],
+        "confirm_existence": [0.5, 0.6, 0.7, 0.8],
+        "delete_existence": [0.01, 0.05, 0.2],
+        "births_per_scan": [0.01, 0.02, 0.05, 0.2],
+        "mean_life": [300.0, 600.0, 1800.0, 5000.0],
         "gate_probability": [0.99, 0.999, 0.9999],
-        "max_speed": [10.0, 25.7, 40.0],
+        "max_speed": [15.4, 20.6, 25.7],  # 30, 40, 50 kn
         "init_scans": [2, 3],
         "association": ["gnn", "jpda"],
     }
@@ -374,6 +387,26 @@ def tune_seatrack(runs: list[MultiTargetRun]) -> None:
             g = [score(r, run_seatrack(r, cfg, q)).mean_gospa for r in runs]
             each = ", ".join(f"{x:.1f}" for x in g)
             print(f"seatrack {name}={v}: mean GOSPA {np.mean(g):.1f} ({each})", flush=True)
+
+
+def tune_methods(runs: list[MultiTargetRun]) -> None:
+    """Every registered method as the per-track filter on the tuning runs, given only the
+    sensor noise, with each automatic process-noise rule: the evidence for
+    ``seatrack.tracking.auto.AUTO_NOISE`` (methods needing range rate are skipped: the
+    scenarios have none)."""
+    from seatrack.filters.registry import METHODS, method_class
+
+    print("\nper-track filters on the tuning scenarios (mean GOSPA; * = AUTO_NOISE)")
+    for name in METHODS:
+        if getattr(method_class(name), "needs_range_rate", False):
+            continue
+        rules = ["own", "wrap"] + (["levels"] if name == "ekf" else [])
+        cells = []
+        for rule in rules:
+            g = np.mean([score(r, run_seatrack(r, TrackerConfig(), method=name, rule=rule))
+                         .mean_gospa for r in runs])  # fmt: skip
+            cells.append(f"{rule}{'*' if AUTO_NOISE[name] == rule else ''} {g:.1f}")
+        print(f"  {name:16s} " + "   ".join(cells), flush=True)
 
 
 def tune_stonesoup(runs: list[MultiTargetRun], cases: list[Case]) -> dict[str, float]:
@@ -423,18 +456,21 @@ def compare(cases: list[Case], seeds: list[int], ss: dict[str, float], repeat: i
         )
         nplots = len(run.plots) / run.scan_times.size
         rows = []
-        res = best_of(lambda: run_seatrack(run, TrackerConfig()), repeat)
-        rows.append(row("seatrack gnn (defaults)", [run], [res]))
-        res = best_of(lambda: run_seatrack(run, TrackerConfig(association="jpda")), repeat)
-        rows.append(row("seatrack jpda (defaults)", [run], [res]))
-        res = best_of(lambda: run_seatrack(run, TrackerConfig(), q=SINGLE_Q), repeat)
-        rows.append(row(f"seatrack gnn, one q={SINGLE_Q:g} (tuned)", [run], [res]))
+        trackers: list[tuple[str, TrackerConfig, float | None]] = [
+            ("seatrack gnn (defaults)", TrackerConfig(), None),
+            ("seatrack jpda (defaults)", TrackerConfig(association="jpda"), None),
+            ("seatrack gnn, M-of-N 3/4", TrackerConfig(confirmation="m-of-n"), None),
+            (f"seatrack gnn, one q={SINGLE_Q:g} (tuned)", TrackerConfig(), SINGLE_Q),
+        ]
+        for name, cfg, q in trackers:
+            res = best_of(lambda cfg=cfg, q=q: run_seatrack(run, cfg, q), repeat)
+            rows.append(row(name, [run], [res]))
         ss_gnn = run_stonesoup(run, ss, "gnn", case.pd, case.clutter)
         rows.append(row("stonesoup gnn (tuned)", [run], [ss_gnn]))
         if jpda_ss:
             ss_j = run_stonesoup(run, ss, "jpda", case.pd, case.clutter)
             rows.append(row("stonesoup jpda (tuned)", [run], [ss_j]))
-        ref = rows[3]["ms"]
+        ref = rows[len(trackers)]["ms"]
         for r in rows:
             r["speedup"] = ref / r["ms"]
         print_table(
@@ -442,6 +478,14 @@ def compare(cases: list[Case], seeds: list[int], ss: dict[str, float], repeat: i
             f"{case.pd}, {run.scan_times.size} scans, {nplots:.0f} plots/scan, seed {seed} "
             f"(x faster: against stonesoup gnn)",
             rows,
+        )
+        best_ss = min(r["gospa"] for r in rows[len(trackers) :])
+        print(
+            f"{case.name}: mean GOSPA / Stone Soup's better tracker: gnn "
+            f"{rows[0]['gospa'] / best_ss:.3f}, jpda {rows[1]['gospa'] / best_ss:.3f} "
+            f"(target <= 0.9); CPU speed-up of seatrack gnn: {rows[0]['speedup']:.0f}x "
+            f"(target >= 50x)",
+            flush=True,
         )
 
 
@@ -487,6 +531,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="S10 only, 30 scans, scaling to 100")
     ap.add_argument("--tune", action="store_true", help="re-run the parameter searches first")
+    ap.add_argument(
+        "--methods", action="store_true", help="every method as the per-track filter (tuning)"
+    )
+    ap.add_argument("--cases", default="S10,S30,S100", help="evaluation cases to run")
+    ap.add_argument("--no-scaling", action="store_true", help="skip the scaling curve")
     ap.add_argument("--repeat", type=int, default=3, help="seatrack runs per case (best time)")
     ap.add_argument("--ss-max", type=int, default=100, help="largest Stone Soup scaling case")
     ap.add_argument("--no-jpda", action="store_true", help="skip Stone Soup's JPDA")
@@ -494,8 +543,10 @@ def main() -> None:
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"machine: {os.cpu_count()} cores, load average {load:.1f} at start")
     ss = dict(STONESOUP)
+    tune_runs = [simulate(c, TUNE_SEED + k) for k, c in enumerate(TUNE)]
+    if args.methods:
+        tune_methods(tune_runs)
     if args.tune:
-        tune_runs = [simulate(c, TUNE_SEED + k) for k, c in enumerate(TUNE)]
         tune_seatrack(tune_runs)
         ss = tune_stonesoup(tune_runs, TUNE)
     q_s, q_m = noise_levels(PERIOD)
@@ -507,12 +558,14 @@ def main() -> None:
         f"stonesoup settings: {ss}; gate probability 0.999 (Mahalanobis "
         f"{math.sqrt(gate_threshold(0.999, 2)):.2f}); JPDA with the true Pd and clutter density"
     )
-    cases = EVAL[:1] if args.quick else EVAL
-    seeds = [EVAL_SEED + k for k in range(len(cases))]
-    compare(cases, seeds, ss, 1 if args.quick else args.repeat, 30 if args.quick else None,
+    wanted = ["S10"] if args.quick else args.cases.split(",")
+    picked = [(c, EVAL_SEED + k) for k, c in enumerate(EVAL) if c.name in wanted]
+    compare([c for c, _ in picked], [sd for _, sd in picked], ss,
+            1 if args.quick else args.repeat, 30 if args.quick else None,
             not args.no_jpda)  # fmt: skip
     sizes = [10, 30, 100] if args.quick else [10, 30, 100, 300, 1000]
-    scaling(sizes, ss, min(args.ss_max, 30) if args.quick else args.ss_max, args.repeat, 17)
+    if not args.no_scaling:
+        scaling(sizes, ss, min(args.ss_max, 30) if args.quick else args.ss_max, args.repeat, 17)
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"load average {load:.1f} at the end")
 

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from seatrack.filters.base import Plots, SensorNoise
+from seatrack.filters.registry import METHODS
 from seatrack.io.multitarget import (
     has_track_column,
     make_filter,
@@ -17,6 +18,7 @@ from seatrack.io.multitarget import (
 from seatrack.io.table import InputError
 from seatrack.tracking import MultiTargetTracker
 from seatrack.tracking.adaptive import NoiseLevels
+from seatrack.tracking.auto import AUTO_NOISE
 
 
 def _write(path, rows, header="time_s,range_m,azimuth_deg"):
@@ -74,12 +76,17 @@ def test_duplicate_times_are_scans(tmp_path):
     )
 
 
-def test_make_filter_and_unknown_method():
-    p = Plots(np.array([0.0, 2.0]), np.array([1000.0, 1000.0]), np.array([0.1, 0.1]))
-    assert isinstance(make_filter("ekf", {}, SensorNoise(), p), NoiseLevels)
-    assert not isinstance(make_filter("ekf", {"q": 0.5}, SensorNoise(), p), NoiseLevels)
-    with pytest.raises(ValueError, match="cannot be the per-track filter"):
-        make_filter("robust", {}, SensorNoise(), p)
+def test_make_filter_builds_every_registered_method_and_rejects_unknown_ones():
+    p = Plots(np.array([0.0, 2.0]), np.array([1000.0, 1000.0]), np.array([0.1, 0.1]),
+              range_rate=np.zeros(2))  # fmt: skip
+    for name in METHODS:
+        m, rule = make_filter(name, {}, p)
+        assert rule == AUTO_NOISE[name] and m.name == name
+        assert isinstance(m.filter, NoiseLevels) == (rule != "own")
+    m, rule = make_filter("ekf", {"q": 0.5}, p)
+    assert rule == "given" and not isinstance(m.filter, NoiseLevels)
+    with pytest.raises(ValueError, match="unknown method"):
+        make_filter("kalman9", {}, p)
 
 
 def test_outputs_account_for_every_plot(tmp_path):
@@ -90,8 +97,8 @@ def test_outputs_account_for_every_plot(tmp_path):
                           rng.uniform(1000, 9000, (8, 2))]).ravel()  # fmt: skip
     az = np.column_stack([np.full(8, 0.5), np.full(8, 2.0), rng.uniform(0, 6, (8, 2))]).ravel()
     p = Plots(t, rr + rng.normal(0, 5, t.size), az, line=np.arange(t.size) + 2)
-    flt = make_filter("ekf", {}, SensorNoise(), p)
-    run = MultiTargetTracker(flt, SensorNoise()).run(p)
+    flt, _ = make_filter("ekf", {}, p)
+    run = MultiTargetTracker(flt.filter, SensorNoise()).run(p)
     n = write_tracks(tmp_path / "tracks.csv", run, p)
     with open(tmp_path / "tracks.csv") as fh:
         rows = list(csv.DictReader(fh))
@@ -110,3 +117,51 @@ def test_outputs_account_for_every_plot(tmp_path):
             assert by_line[int(r["plot_line"])] == r["track"]
     assert {r["track"] for r in lab} - {"clutter"} == {r["track"] for r in rows}
     assert set(used) <= set(by_line)
+
+
+def _radar_file(path, seed):
+    """A small unlabelled scenario with range rate (so that every method can run)."""
+    from seatrack.simulate.multitarget import TargetPopulation, simulate_multitarget
+    from seatrack.simulate.scenarios import SensorConfig
+
+    radar = SensorConfig(
+        "r", "radar2d", ("azimuth", "range", "range_rate"), (np.radians(0.3), 15.0, 0.5),
+        p_detect=0.95, clutter_density=4.0, clutter_range=(500.0, 9000.0), scan_period=2.5,
+    )  # fmt: skip
+    pop = TargetPopulation(targets=4, births_per_scan=0.0, mean_life=0.0, crossings=0,
+                           range_limits=(2000.0, 8000.0))  # fmt: skip
+    sim = simulate_multitarget(pop, radar, 60.0, np.random.default_rng(seed))
+    write_unlabelled_plots(path, sim.plots)
+    return sim
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_every_registered_method_tracks_unlabelled_plots(tmp_path, method):
+    """Any registered method is the per-track filter: tracks confirmed on every target,
+    every plot accounted for, no NaN."""
+    from seatrack.io.multitarget import track_unlabelled
+
+    sim = _radar_file(tmp_path / "plots.csv", seed=21)
+    cfg = tmp_path / "radar.toml"
+    cfg.write_text("[sensor]\nsigma_range_m = 15.0\nsigma_azimuth_deg = 0.3\n"
+                   "sigma_range_rate_mps = 0.5\n")  # fmt: skip
+    line = track_unlabelled(tmp_path / "plots.csv", tmp_path / "t.csv", method, cfg,
+                            plots_out=tmp_path / "labels.csv")  # fmt: skip
+    assert line.startswith(f"{method} multi-target (gnn)")
+    with open(tmp_path / "t.csv") as fh:
+        rows = list(csv.DictReader(fh))
+    with open(tmp_path / "labels.csv") as fh:
+        labels = list(csv.DictReader(fh))
+    xy = np.array([[float(r["x_m"]), float(r["y_m"]), float(r["std_x_m"])] for r in rows])
+    assert xy.size and np.isfinite(xy).all()
+    assert len(labels) == len(sim.plots)  # every plot, with its track or as clutter
+    ids = {r["track"] for r in rows}
+    lab = np.array([r["track"] for r in labels])
+    assert set(lab) - {"clutter"} <= ids
+    # each target's plots mostly went to one reported track
+    order = np.argsort(sim.plots.t, kind="stable")  # the file is in time order
+    origin = sim.origin[order]
+    for k in np.unique(origin[origin >= 0]):
+        mine = lab[origin == k]
+        top = max(np.unique(mine[mine != "clutter"], return_counts=True)[1], default=0)
+        assert top >= 0.6 * mine.size, (k, method)

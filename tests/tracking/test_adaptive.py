@@ -3,7 +3,14 @@
 import numpy as np
 import pytest
 
-from seatrack.filters.base import Plots, PlotStatus, RecursiveFilter, SensorNoise, plot_gaussian
+from seatrack.filters.base import (
+    Plots,
+    PlotStatus,
+    RecursiveFilter,
+    SensorNoise,
+    TrackState,
+    plot_gaussian,
+)
 from seatrack.filters.ekf import EKF, EKFConfig
 from seatrack.simulate import Leg, NoiseModel, observe, trajectory
 from seatrack.tracking.adaptive import NoiseLevels
@@ -76,3 +83,36 @@ def test_rejects_bad_parameters():
         NoiseLevels(EKF(), (0.0,))
     with pytest.raises(ValueError, match="p_switch"):
         NoiseLevels(EKF(), (0.0, 1.0), 1.5)
+
+
+def test_jpda_merge_reduces_each_model_and_keeps_the_mixture():
+    """Two hypotheses of one track: the merged outer state is the moment-matched mixture of
+    all (hypothesis, model) pairs, and the model probabilities sum the weights."""
+    from seatrack.tracking.merge import moment_match
+
+    plots, _ = _plots([Leg.straight(30.0)])
+    imm = NoiseLevels(EKF(EKFConfig(q=0.01), SN), (0.0, 1.0), 0.05)
+    s = _run(imm, plots.take([0, 1, 2]))[-1]
+    pred = imm.predict(s, plots.t[3:4])
+    upd = imm.update(pred, plots.take([3]))
+    hyps = TrackState.concat([upd, pred])
+    w = np.array([0.7, 0.3])
+    merged = imm.merge(hyps, w, np.zeros(2, np.int64), 1)
+    mu_h = np.asarray(hyps.aux["noise_mu"])  # (2, M)
+    joint = (w[:, None] * mu_h).ravel()
+    X = hyps.aux["noise_models"].x.reshape(-1, 4)
+    P = hyps.aux["noise_models"].P.reshape(-1, 4, 4)
+    x, Pm = moment_match(X, P, joint, np.zeros(4, np.int64), 1)
+    assert np.allclose(merged.x, x) and np.allclose(merged.P, Pm)
+    assert np.allclose(merged.aux["noise_mu"], (w[:, None] * mu_h).sum(0))
+    assert merged.aux["noise_models"].x.shape == (1, 2, 4)
+
+
+def test_extra_noise_per_track_interval():
+    plots, _ = _plots([Leg.straight(30.0)])
+    imm = NoiseLevels(EKF(EKFConfig(q=0.0), SN), (0.0, 2.0), 0.01)
+    x, P = plot_gaussian(plots.take([0, 1]), SN, 10.0)
+    s = imm.initiate(np.zeros(2), x, P)
+    a = imm.predict(s, np.array([2.0, 5.0]))  # different intervals per track
+    b = imm.predict(s.take([1]), np.array([5.0]))
+    assert np.allclose(a.x[1], b.x[0]) and np.allclose(a.P[1], b.P[0])

@@ -94,3 +94,27 @@ def test_group_logsumexp():
     assert got[0] == pytest.approx(logsumexp([0.5, 1.0, 2.0]))
     assert got[1] == pytest.approx(-1.0)
     assert got[2] == pytest.approx(logsumexp([0.0, -3.0, 700.0]))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+def test_gnn_equals_scipy_on_large_clusters(seed):
+    """Dense clusters of up to 40 tracks: the compiled assignment reaches the optimum that
+    linear_sum_assignment finds on the same problem (plots plus one dummy per track)."""
+    from scipy.optimize import linear_sum_assignment
+
+    rng = np.random.default_rng(seed)
+    n_tracks, n_plots = 40, 50
+    mask = rng.random((n_tracks, n_plots)) < 0.3
+    track, plot = (a.astype(np.int64) for a in np.nonzero(mask))
+    gain = rng.normal(1.0, 2.0, track.size)
+    got = gnn(track, plot, gain, n_tracks, n_plots)
+    C = np.full((n_tracks, n_plots + n_tracks), 1e9)
+    C[:, n_plots:] = 0.0
+    ok = gain > 0
+    C[track[ok], plot[ok]] = -gain[ok]
+    r, c = linear_sum_assignment(C)
+    best = -C[r, c].sum()
+    value = sum(gain[(track == i) & (plot == j)][0] for i, j in enumerate(got) if j >= 0)
+    assert value == pytest.approx(best, abs=1e-9)
+    used = got[got >= 0]
+    assert len(used) == len(set(used.tolist()))

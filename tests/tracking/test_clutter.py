@@ -43,3 +43,14 @@ def test_detection_rate():
         d.update(hits=8, misses=2)  # 80 %
     assert d.pd == pytest.approx(0.8, abs=0.01)
     assert DetectionRate(given=0.95).pd == 0.95
+
+
+def test_plots_that_start_tracks_leave_the_clutter_count_of_their_scan():
+    c = ClutterRate(None, memory=10.0)
+    c.update(20.0)  # first scan: every plot unexplained
+    c.update(11.0)
+    c.explain_earlier(9.0, scans_ago=1)  # the first scan's target plots started tracks
+    forget = 1 - 1 / 10
+    assert c.per_scan == pytest.approx((forget * 11.0 + 11.0) / (forget + 1.0))
+    c.explain_earlier(1e6, 1)
+    assert c.per_scan == pytest.approx(0.1)  # never below the floor

@@ -92,3 +92,59 @@ def test_gate_uses_the_plot_gaussian_of_the_sensor():
     state = TrackState.new([0.0], x, P)
     cand = gate(EKF(EKFConfig(), SN), state, p, p.positions(), SN, 0.999)
     assert cand.plot.tolist() == [0]
+
+
+def test_pregate_brute_force_equals_the_kd_tree():
+    rng = np.random.default_rng(7)
+    tp = rng.uniform(0, 5000, (30, 2))
+    pp = rng.uniform(0, 5000, (200, 2))  # 6000 pairs: the KD-tree path
+    radius = rng.uniform(100, 600, 30)
+    ti, pj = pregate(tp, radius, pp)
+    small_t, small_p = pregate(tp[:10], radius[:10], pp[:100])  # 1000 pairs: brute force
+    want = {(i, j) for i in range(30) for j in range(200)
+            if np.linalg.norm(tp[i] - pp[j]) <= radius[i]}  # fmt: skip
+    assert set(zip(ti.tolist(), pj.tolist(), strict=True)) == want
+    assert set(zip(small_t.tolist(), small_p.tolist(), strict=True)) == {
+        (i, j) for i, j in want if i < 10 and j < 100
+    }
+    assert np.all(np.diff(small_t) >= 0)  # in track order
+
+
+def test_innovation_space_is_measured():
+    from seatrack.filters import registry
+    from seatrack.tracking.gating import CARTESIAN, POLAR, innovation_space
+
+    spaces = {m: innovation_space(registry.build(m).filter, SN)
+              for m in ("ekf", "imm", "mm", "turning", "ekf-rb")}  # fmt: skip
+    assert spaces == {"ekf": POLAR, "imm": CARTESIAN, "mm": CARTESIAN, "turning": POLAR,
+                      "ekf-rb": POLAR}  # fmt: skip
+    assert innovation_space(registry.build("ekf", d=3).filter, SN) == POLAR
+    assert innovation_space(registry.build("imm", d=3).filter, SN) == CARTESIAN
+
+    class Scaled(EKF):
+        def innovation(self, state, plots):
+            y, S = super().innovation(state, plots)
+            return 7.0 * y, 49.0 * S
+
+    with pytest.raises(ValueError, match="neither polar nor"):
+        innovation_space(Scaled(EKFConfig(), SN), SN)
+
+
+def test_cartesian_likelihoods_are_carried_to_the_polar_space():
+    """The same plot under a polar and a Cartesian filter: densities differ by |J| = r."""
+    from seatrack.filters import registry
+    from seatrack.tracking.gating import CARTESIAN, log_jacobian
+
+    p = Plots(np.zeros(1), np.array([8000.0]), np.array([0.3]))
+    x, P = plot_gaussian(p, SN, 5.0)
+    P[:, :2, :2] *= 4.0
+    for name in ("ekf", "imm"):
+        flt = registry.build(name, {"sigma_range_m": 15.0, "sigma_azimuth_deg": 0.5}).filter
+        state = flt.predict(flt.initiate(np.zeros(1), x, P), np.ones(1))
+        space = "polar" if name == "ekf" else CARTESIAN
+        c = gate(flt, state, p, p.positions(), SN, 0.999, space)
+        if name == "ekf":
+            ekf_log_g = c.log_g[0]
+        else:
+            assert c.log_g[0] == pytest.approx(ekf_log_g, abs=0.05)  # same density, 1e-2
+    assert log_jacobian(CARTESIAN, p)[0] == pytest.approx(np.log(8000.0))

@@ -125,9 +125,11 @@ def test_tracks_every_target_with_any_filter(make, association):
         assert n.max() / n.sum() > 0.8
 
 
-def test_ids_are_stable_and_rows_consistent():
+@pytest.mark.parametrize("rule", ["existence", "m-of-n"])
+def test_ids_are_stable_and_rows_consistent(rule):
     sim = _scenario(seed=5)
-    out = MultiTargetTracker(EKF(EKFConfig(q=0.1), SN), SN).run(sim.plots, all_tracks=True)
+    trk = MultiTargetTracker(EKF(EKFConfig(q=0.1), SN), SN, TrackerConfig(confirmation=rule))
+    out = trk.run(sim.plots, all_tracks=True)
     # one row per (scan, track); a track's rows are at consecutive scans while it lives
     key = out.t * 1e6 + out.track
     assert np.unique(key).size == key.size
@@ -136,14 +138,59 @@ def test_ids_are_stable_and_rows_consistent():
         assert np.allclose(np.diff(tt), 2.5)
         st = out.status[out.track == tid][np.argsort(out.t[out.track == tid])]
         first_conf = np.flatnonzero(st != TrackStatus.TENTATIVE)
-        if first_conf.size:  # tentative rows only before confirmation
+        if first_conf.size and rule == "m-of-n":  # tentative rows only before confirmation
             assert np.all(st[first_conf[0] :] != TrackStatus.TENTATIVE)
+    # reported exactly while the existence probability is high enough
+    reported = out.status != TrackStatus.TENTATIVE
+    if rule == "existence":
+        assert np.array_equal(reported, out.existence >= TrackerConfig().confirm_existence)
+    assert np.all((out.existence > 0) & (out.existence <= 1))
     # the plot of a row is a plot of that scan; coasting rows have none
     has = out.plot >= 0
     assert np.allclose(sim.plots.t[out.plot[has]], out.t[has])
     assert np.all(out.plot[out.status == TrackStatus.COASTING] < 0)
     # every plot that updated a track is labelled with it
     assert np.array_equal(out.plot_track[out.plot[has]], out.track[has])
+
+
+def test_existence_confirms_by_the_clutter_density():
+    """Sparse clutter: every target reported at its second plot, surely. Dense clutter
+    (300 plots per scan): the first scan's target share is estimated from the pairs, the
+    second-plot tracks are less sure, and the few false ones are gone a scan later."""
+    sim = _scenario(seed=12, targets=6, clutter=2.0, pd=1.0, duration=30.0)
+    trk = MultiTargetTracker(EKF(EKFConfig(q=0.1), SN), SN)
+    out = trk.run(sim.plots)
+    s = _score(sim, out)
+    n0 = s.scans.n_truth[0]
+    assert s.scans.n_missed[0] == n0 > 0  # one plot: nothing reported
+    assert s.scans.n_missed[1] == 0 and s.scans.n_false[1] == 0  # two plots: all reported
+    sure = out.existence[out.t == 2.5]
+    dense = _scenario(seed=12, targets=6, clutter=300.0, pd=1.0, duration=30.0)
+    trk = MultiTargetTracker(EKF(EKFConfig(q=0.1), SN), SN)
+    out = trk.run(dense.plots)
+    s = _score(dense, out)
+    share = n0 / np.count_nonzero(dense.plots.t == 0.0)
+    assert trk.undetected.first_plots > 250
+    assert np.median(out.existence[out.t == 2.5]) < np.median(sure)
+    assert s.scans.n_false[2:].sum() == 0 and s.scans.n_missed[2:].sum() == 0
+    assert 0.5 * share < trk.undetected.first_share < 2 * share
+
+
+def test_existence_drops_dead_tracks_quickly_and_keeps_live_ones():
+    """Pd 0.95: a target that vanishes is no longer reported after 3 missed scans, the
+    M-of-N rule needs its max_misses; a live target at Pd 0.7 keeps its id."""
+    sim = _scenario(seed=13, targets=5, clutter=5.0, pd=0.95, duration=100.0)
+    gone = sim.origin == sim.origin[sim.origin >= 0].min()
+    stop = 50.0
+    cut = ~(gone & (sim.plots.t > stop))  # target 0 dies after t = 50 s
+    plots = sim.plots.take(np.flatnonzero(cut))
+    out = MultiTargetTracker(EKF(EKFConfig(q=0.1), SN), SN).run(plots)
+    tid = np.bincount(out.plot_track[np.flatnonzero(gone[cut])] + 1).argmax() - 1
+    assert tid >= 0 and out.t[out.track == tid].max() <= stop + 3 * 2.5
+    live = _scenario(seed=14, targets=3, clutter=5.0, pd=0.7, duration=150.0)
+    out = MultiTargetTracker(EKF(EKFConfig(q=0.1), SN), SN).run(live.plots)
+    s = _score(live, out)
+    assert s.id_switches == 0 and s.scans.n_missed[live.scan_times > 30].mean() < 0.5
 
 
 def test_deterministic():
@@ -223,6 +270,7 @@ def test_3d_plots_with_range_rate():
     sim = simulate_multitarget(pop, radar, 80.0, np.random.default_rng(11), observer=[0, 0, 30])
     flt = EKF(EKFConfig(q=0.1), sn, d=3, range_rate=True)
     out = MultiTargetTracker(flt, sn).run(sim.plots)
+    assert out.existence.size == out.t.size
     s = _score(sim, out)
     assert s.scans.n_missed[sim.scan_times >= 20].mean() < 0.3
     assert np.isfinite(out.columns["z_m"]).all()

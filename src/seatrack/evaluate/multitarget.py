@@ -355,15 +355,15 @@ def track_scenario_run(
     """The multi-target tracker (per-track filter ``method``, configuration ``table`` of
     sensor, tracker and method keys) on one simulated run, scored against its truth."""
     from seatrack.config import parse_config
-    from seatrack.filters.base import SensorNoise
-    from seatrack.io.multitarget import make_filter, split_config
+    from seatrack.io.multitarget import make_filter, sensor_noise, split_config
     from seatrack.tracking import MultiTargetTracker, TrackerConfig
 
-    s_tab, t_tab, rest = split_config(table, "scenario")
-    sensor = parse_config(SensorNoise, s_tab, source="scenario")
+    t_tab, m_tab = split_config(table, "scenario")
+    sensor = sensor_noise(m_tab, "scenario")
     tcfg = parse_config(TrackerConfig, {**t_tab, "association": association}, source="scenario")
-    tracker = MultiTargetTracker(make_filter(method, rest, sensor, sim.plots), sensor, tcfg)
-    out = tracker.run(sim.plots)
+    flt, _ = make_filter(method, m_tab, sim.plots, "scenario")
+    tracker = MultiTargetTracker(flt.filter, sensor, tcfg)
+    out = tracker.run(flt.prepare(sim.plots))
     d = 2
     pos = np.stack([out.columns["x_m"], out.columns["y_m"]], -1) if out.t.size else np.zeros((0, d))
     scores = score_run(

@@ -21,7 +21,6 @@ Outputs, all written atomically (:mod:`seatrack.io.atomic`):
 from __future__ import annotations
 
 import csv
-import importlib
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -31,7 +30,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.config import ConfigError, config_keys, load_toml, parse_config
-from seatrack.filters.base import COMMON_COLUMNS, Plots, RecursiveFilter, SensorNoise
+from seatrack.filters import registry
+from seatrack.filters.base import COMMON_COLUMNS, Plots, SensorNoise
 from seatrack.io.atomic import atomic_path, atomic_write, check_output_path
 from seatrack.io.table import InputError, Table, check_times, decode_text, read_csv_table
 from seatrack.tracking import MultiTargetTracker, TrackerConfig, TrackerRun, TrackStatus
@@ -40,10 +40,10 @@ from seatrack.tracking.auto import per_track_filter, scan_period
 FloatArray = NDArray[np.float64]
 
 __all__ = [
-    "CONTRACT_FILTERS",
     "has_track_column",
     "read_unlabelled_plots",
     "make_filter",
+    "sensor_noise",
     "split_config",
     "save_picture",
     "write_tracks",
@@ -55,11 +55,6 @@ __all__ = [
 
 REQUIRED = ("time_s", "range_m", "azimuth_deg")
 OPTIONAL = ("elevation_deg", "range_rate_mps", "sensor_x_m", "sensor_y_m", "sensor_z_m")
-
-#: methods usable as the per-track filter: name -> (module, class). Each class honours
-#: :class:`~seatrack.filters.base.RecursiveFilter`, has a ``Config`` dataclass and is built
-#: as ``cls(config, sensor, d=d, range_rate=range_rate)``.
-CONTRACT_FILTERS: dict[str, tuple[str, str]] = {"ekf": ("seatrack.filters.ekf", "EKF")}
 
 
 def has_track_column(path: str | Path) -> bool:
@@ -138,10 +133,11 @@ def read_unlabelled_plots(path: str | Path) -> Plots:
 # ---------------------------------------------------------------------------
 # Configuration and the per-track filter
 # ---------------------------------------------------------------------------
-def split_config(table: Mapping[str, Any], source: str) -> tuple[dict[str, Any], ...]:
-    """Keys of the sensor, of the tracker (top level or a ``[tracker]`` table), the rest."""
-    sensor_keys, tracker_keys = config_keys(SensorNoise), config_keys(TrackerConfig)
-    sensor: dict[str, Any] = {}
+def split_config(table: Mapping[str, Any], source: str) -> tuple[dict[str, Any], dict[str, Any]]:
+    """``(tracker keys, method table)``: the tracker's keys (top level or a ``[tracker]``
+    table) and the rest -- the method's keys and the sensor keys (flat or in ``[sensor]``),
+    as :func:`seatrack.filters.registry.build` takes them."""
+    tracker_keys = config_keys(TrackerConfig)
     tracker: dict[str, Any] = {}
     rest: dict[str, Any] = {}
     for k, v in table.items():
@@ -149,35 +145,28 @@ def split_config(table: Mapping[str, Any], source: str) -> tuple[dict[str, Any],
             if not isinstance(v, Mapping):
                 raise ConfigError(f"{source}: [tracker] must be a table")
             tracker.update(v)
-        elif k in sensor_keys:
-            sensor[k] = v
         elif k in tracker_keys:
             tracker[k] = v
         else:
             rest[k] = v
-    return sensor, tracker, rest
+    return tracker, rest
+
+
+def sensor_noise(table: Mapping[str, Any], source: str = "config") -> SensorNoise:
+    """The sensor section of a method table (flat keys or ``[sensor]``)."""
+    sensor_tab, _ = registry.split_config(table, source)
+    return parse_config(SensorNoise, sensor_tab, source=source)
 
 
 def make_filter(
-    method: str,
-    table: Mapping[str, Any],
-    sensor: SensorNoise,
-    plots: Plots,
-    source: str = "config",
-) -> RecursiveFilter:
-    """The per-track filter ``method`` configured from ``table`` (its own keys); without a
-    process noise in ``table``, adaptive noise levels from the target class and the scan
-    period (:func:`seatrack.tracking.auto.per_track_filter`)."""
-    if method not in CONTRACT_FILTERS:
-        raise ValueError(
-            f"method {method!r} cannot be the per-track filter of the multi-target tracker "
-            f"yet; choose one of {', '.join(sorted(CONTRACT_FILTERS))}"
-        )
-    module, name = CONTRACT_FILTERS[method]
-    cls = getattr(importlib.import_module(module), name)
-    cfg = parse_config(cls.Config, table, source=source)
-    rr = plots.range_rate is not None
-    return per_track_filter(cls, cfg, set(table), sensor, plots.d, rr, scan_period(plots.t))
+    method: str, table: Mapping[str, Any], plots: Plots, source: str = "config"
+) -> tuple[registry.Method, str]:
+    """The per-track filter: registered method ``method`` configured from ``table`` (its
+    keys and the sensor keys) for these plots, with the automatic process noise of
+    :mod:`seatrack.tracking.auto` when ``table`` sets none; and the noise rule applied."""
+    return per_track_filter(
+        method, table, plots.d, plots.has_range_rate, scan_period(plots.t), source
+    )
 
 
 # ---------------------------------------------------------------------------
@@ -267,16 +256,24 @@ class UnlabelledRun:
     run: TrackerRun
     tracker: MultiTargetTracker
     rows: int
+    noise: str = "given"  #: process-noise rule (:func:`seatrack.tracking.auto.per_track_filter`)
 
     def summary(self, method: str, out: Path) -> str:
         n_clutter = int((self.run.plot_track < 0).sum())
+        noise = {
+            "given": "as configured",
+            "own": "the method's defaults",
+            "levels": "automatic (two-level IMM)",
+            "wrap": "the method's + manoeuvre level",
+        }
         return (
             f"{method} multi-target ({self.tracker.config.association}): "
             f"{self.run.scan_times.size} scans, {len(self.plots)} plots "
             f"({n_clutter} clutter or unconfirmed), {self.run.confirmed_ids.size} confirmed "
             f"tracks, {self.rows} rows written to {out}; clutter "
             f"{self.tracker.clutter.per_scan:.1f} plots/scan, Pd {self.tracker.detection.pd:.2f}"
-        )
+            f"; process noise {noise.get(self.noise, self.noise)}"
+        )  # fmt: skip
 
 
 def track_unlabelled(
@@ -295,24 +292,24 @@ def track_unlabelled(
             check_output_path(p)
     table = load_toml(config) if config is not None else {}
     source = str(config) if config is not None else "config"
-    s_tab, t_tab, rest = split_config(table, source)
+    t_tab, m_tab = split_config(table, source)
     if association is not None:
         if association not in ("gnn", "jpda"):
             raise ValueError(f"--association: must be gnn or jpda, got {association!r}")
         t_tab = {**t_tab, "association": association}
-    sensor = parse_config(SensorNoise, s_tab, source=source)
     tcfg = parse_config(TrackerConfig, t_tab, source=source)
+    sensor = sensor_noise(m_tab, source)
     plots = read_unlabelled_plots(plots_csv)
-    flt = make_filter(method, rest, sensor, plots, source)
-    tracker = MultiTargetTracker(flt, sensor, tcfg)
-    run = tracker.run(plots, all_tracks=all_tracks)
+    flt, noise = make_filter(method, m_tab, plots, source)
+    tracker = MultiTargetTracker(flt.filter, sensor, tcfg)
+    run = tracker.run(flt.prepare(plots), all_tracks=all_tracks)
     rows = write_tracks(out, run, plots)
     if plots_out is not None:
         write_plot_labels(plots_out, plots, run.plot_track)
     if plot is not None:
         save_picture(plot, plots, run, title=f"{Path(plots_csv).name}: {method} + "
                      f"{tcfg.association.upper()}")  # fmt: skip
-    return UnlabelledRun(plots, run, tracker, rows).summary(method, out)
+    return UnlabelledRun(plots, run, tracker, rows, noise).summary(method, out)
 
 
 def save_picture(

@@ -1,5 +1,6 @@
 """Multi-target tracking from unlabelled plots: gating, association (GNN, JPDA),
-initiation (two-point, M-of-N), deletion, clutter estimation and the tracker itself.
+initiation (two-point), track existence (confirmation and deletion; or M-of-N), clutter
+estimation and the tracker itself.
 
 The layer above the filters: any :class:`~seatrack.filters.base.RecursiveFilter` is the
 per-track filter. See ``docs/tracking.md``.

@@ -17,30 +17,50 @@ its prediction -- the two-level process noise IMM of BLK section 11.7:
 4. the outer state -- what gating, association and output see -- is the moment-matched
    combination, with the predicted model probabilities ``c_j`` before the update.
 
-The model states live in ``aux["noise_models"]`` (a nested TrackState of shape ``(B, ...)``
-per model: ``aux["noise_models"]`` holds the models stacked on a second axis) and the model
-probabilities in ``aux["noise_mu"]``; the ``manoeuvre`` output column is the probability of
-the high-noise model. The switching probability per scan ``p_switch`` makes the transition
-matrix ``[[1 - p, p], [p, 1 - p]]``. Only the contract's state layout is used (positions
-``0..d-1``, velocities ``d..2d-1``), so any filter can be wrapped.
+Mixing and combination are the compiled kernels of the IMM engine
+(:func:`seatrack.filters.imm.mix`, :func:`~seatrack.filters.imm.combine`); every model of
+every track goes through the wrapped filter in one batched call.
+
+The model states live in ``aux["noise_models"]`` (one nested TrackState whose arrays are
+``(B, M, ...)``: the models stacked on a second axis) and the model probabilities in
+``aux["noise_mu"]``; the ``manoeuvre`` output column is the probability of the high-noise
+model. The switching probability per scan ``p_switch`` makes the transition matrix
+``[[1 - p, p], [p, 1 - p]]``. Only the contract's state layout is used (positions
+``0..d-1``, velocities ``d..2d-1``), so any filter can be wrapped -- as long as its
+``update`` starts from the state ``predict`` gave (``x``, ``P``); a filter that keeps its
+own prediction in ``aux`` ignores the extra noise. :meth:`NoiseLevels.merge` reduces JPDA
+hypotheses model by model (the mixture of IMM states, weighted by association and model
+probabilities).
 """
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from seatrack.filters.base import Plots, PlotStatus, RecursiveFilter, TrackState
+from seatrack.filters.base import (
+    Plots,
+    PlotStatus,
+    RecursiveFilter,
+    TrackState,
+    predicted,
+    step_times,
+)
+from seatrack.filters.imm import IMMState, combine, mix
 from seatrack.models.motion import cv_noise
+from seatrack.tracking.merge import moment_match
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 __all__ = ["NoiseLevels"]
 
 MODELS, MU = "noise_models", "noise_mu"
+_UPDATED, _REJECTED = int(PlotStatus.UPDATED), int(PlotStatus.REJECTED)
 
 
 def _zip_stack(states: Sequence[TrackState]) -> TrackState:
@@ -61,6 +81,22 @@ def _flat(stacked: TrackState) -> TrackState:
 
 def _unflat(flat: TrackState, B: int, M: int) -> TrackState:
     return flat.map(lambda a: a.reshape((B, M) + a.shape[1:]))
+
+
+@functools.lru_cache(maxsize=64)
+def _unit_cv_noise(dt: float, d: int) -> FloatArray:
+    """White-noise-acceleration CV noise of unit PSD for one interval (read-only, cached)."""
+    q = cv_noise(dt, 1.0, d)
+    q.flags.writeable = False
+    return q
+
+
+def _pick(aux: Any, rows: IntArray, cols: IntArray) -> dict[str, Any]:
+    """The ``aux`` entries of model ``cols[b]`` of each track ``rows[b]``."""
+    out: dict[str, Any] = {}
+    for k, v in aux.items():
+        out[k] = v.map(lambda a: a[rows, cols]) if isinstance(v, TrackState) else v[rows, cols]
+    return out
 
 
 class NoiseLevels:
@@ -89,27 +125,38 @@ class NoiseLevels:
         np.fill_diagonal(self.transition, 1 - p_switch)
         self.d = flt.d
         self.range_rate = flt.range_rate
+        n = len(flt.state_names)
+        self._valid = np.ones((M, n))
+        self._out = np.arange(n)
 
     @property
     def state_names(self) -> tuple[str, ...]:
         return self.flt.state_names
 
     # -- helpers ------------------------------------------------------------------------
-    def _outer(self, models: TrackState, mu: FloatArray, status: Any = None) -> TrackState:
-        """Combined (moment-matched) state over the models, carrying them in aux."""
-        x = np.einsum("bm,bmi->bi", mu, models.x)
-        dx = models.x - x[:, None, :]
-        P = np.einsum("bm,bmij->bij", mu, models.P + dx[..., :, None] * dx[..., None, :])
-        best = np.argmax(mu, axis=1)
-        dom = models.map(lambda a: a[np.arange(a.shape[0]), best])  # the dominant model
-        return TrackState(
-            dom.t, x, 0.5 * (P + np.swapaxes(P, -1, -2)), dom.nis, dom.log_likelihood,
-            dom.status if status is None else status, {**dom.aux, MODELS: models, MU: mu},
-        )  # fmt: skip
-
     @staticmethod
     def _parts(state: TrackState) -> tuple[TrackState, FloatArray]:
         return state.aux[MODELS], np.asarray(state.aux[MU])
+
+    def _base(self, state: TrackState) -> TrackState:
+        """The outer state with the filter's own ``aux`` of each track's most probable
+        model (what the filter's ``innovation`` and ``columns`` read)."""
+        models, mu = self._parts(state)
+        best = np.argmax(mu, axis=1)
+        aux = _pick(models.aux, np.arange(best.size), best)
+        return TrackState(state.t, state.x, state.P, state.nis, state.log_likelihood,
+                          state.status, aux)  # fmt: skip
+
+    def _extra_noise(self, P: FloatArray, dt: FloatArray, B: int) -> FloatArray:
+        """``P`` (``B * M`` model covariances) plus ``extra[j] Q1(dt)`` on position-velocity."""
+        d2 = 2 * self.d
+        out = P.copy()
+        extra = np.tile(self.extra, B)
+        if dt.size and np.all(dt == dt[0]):  # one scan interval: one unit-PSD matrix
+            out[:, :d2, :d2] += extra[:, None, None] * _unit_cv_noise(float(dt[0]), self.d)
+        else:
+            out[:, :d2, :d2] += cv_noise(dt, extra, self.d)
+        return out
 
     # -- the contract -------------------------------------------------------------------
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
@@ -117,55 +164,68 @@ class NoiseLevels:
         M = self.extra.size
         models = _zip_stack([s] * M)
         mu = np.full((len(s), M), 1.0 / M)
-        return self._outer(models, mu, s.status)
+        return TrackState(s.t, s.x, s.P, s.nis, s.log_likelihood, s.status,
+                          {MODELS: models, MU: mu})  # fmt: skip
 
     def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
         models, mu = self._parts(state)
         B, M = mu.shape
-        c = mu @ self.transition  # (B, M) predicted model probabilities
-        mix = mu[:, :, None] * self.transition[None] / np.maximum(c[:, None, :], 1e-300)
-        x0 = np.einsum("bij,bik->bjk", mix, models.x)
-        dx = models.x[:, :, None, :] - x0[:, None, :, :]  # (B, i, j, n)
-        P0 = np.einsum(
-            "bij,bijkl->bjkl", mix, models.P[:, :, None] + dx[..., :, None] * dx[..., None, :]
-        )
+        tt, _ = step_times(state, t)
+        X0, P0, c = mix(IMMState(models.x, models.P, mu), self.transition, self._valid)
         # all models of all tracks in one call of the filter: a batch of B * M states
-        tt = np.repeat(np.broadcast_to(np.asarray(t, dtype=float), (B,)), M)
-        flat = _flat(models.replace(x=x0, P=P0))
-        s = self.flt.predict(flat, tt)
-        extra = np.tile(self.extra, B)
-        P = s.P.copy()
-        d2 = 2 * self.d
-        P[:, :d2, :d2] += cv_noise(s.t - flat.t, extra, self.d)
-        return self._outer(_unflat(s.replace(P=P), B, M), c)
+        flat = _flat(models.replace(x=X0, P=P0))
+        s = self.flt.predict(flat, np.repeat(tt, M))
+        new = _unflat(s.replace(P=self._extra_noise(s.P, s.t - flat.t, B)), B, M)
+        _, x, P, _ = combine(new.x, new.P, c, np.zeros_like(c), self._out)
+        return predicted(state, tt, x, P, {MODELS: new, MU: c})
 
     def update(self, state: TrackState, plots: Plots) -> TrackState:
         models, c = self._parts(state)
         B, M = c.shape
         new = _unflat(self.flt.update(_flat(models), plots.take(np.repeat(np.arange(B), M))), B, M)
-        ok = new.status == PlotStatus.UPDATED  # (B, M)
-        ll = np.where(ok, new.log_likelihood, -np.inf)
+        ok = new.status == _UPDATED  # (B, M)
         any_ok = ok.any(axis=1)
-        top = np.max(ll, axis=1, keepdims=True)
-        top = np.where(np.isfinite(top), top, 0.0)
-        w = c * np.exp(ll - top)
-        tot = w.sum(1, keepdims=True)
-        mu = np.where(any_ok[:, None], w / np.maximum(tot, 1e-300), c)
-        status = np.where(any_ok, PlotStatus.UPDATED, PlotStatus.REJECTED).astype(np.int8)
-        outer = self._outer(new, mu, status)
-        mix_ll = np.where(any_ok, top[:, 0] + np.log(np.where(any_ok, tot[:, 0], 1.0)), np.nan)
-        return outer.replace(log_likelihood=mix_ll)
+        ll = np.where(ok, new.log_likelihood, -np.inf)
+        ll = np.where(any_ok[:, None], ll, 0.0)  # no usable model: keep the prediction
+        mu, x, P, tot = combine(new.x, new.P, c, ll, self._out)
+        best = np.argmax(mu, axis=1)
+        rows = np.arange(B)
+        status = np.where(any_ok, _UPDATED, _REJECTED).astype(np.int8)
+        nis = np.where(any_ok, new.nis[rows, best], np.nan)
+        return TrackState(state.t, x, P, nis, np.where(any_ok, tot, np.nan), status,
+                          {MODELS: new, MU: mu})  # fmt: skip
 
     def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
-        base = TrackState(state.t, state.x, state.P, state.nis, state.log_likelihood,
-                          state.status, {k: v for k, v in state.aux.items()
-                                         if k not in (MODELS, MU)})  # fmt: skip
-        return self.flt.innovation(base, plots)
+        return self.flt.innovation(self._base(state), plots)
 
     def columns(self, state: TrackState) -> dict[str, NDArray[Any]]:
-        base = TrackState(state.t, state.x, state.P, state.nis, state.log_likelihood,
-                          state.status, {k: v for k, v in state.aux.items()
-                                         if k not in (MODELS, MU)})  # fmt: skip
-        cols = self.flt.columns(base)
+        cols = self.flt.columns(self._base(state))
         cols["manoeuvre"] = np.asarray(state.aux[MU])[:, -1]
         return cols
+
+    def merge(self, states: TrackState, weights: FloatArray, owner: IntArray, n: int) -> TrackState:
+        """Reduce hypotheses (JPDA) model by model: model ``j`` of track ``i`` is the
+        moment-matched mixture of its hypotheses' model ``j`` with weights ``w_h mu_hj``,
+        its probability ``sum_h w_h mu_hj``; the rest of each model from the track's
+        dominant hypothesis (see :func:`seatrack.tracking.merge.merge_hypotheses`)."""
+        models, mu = self._parts(states)
+        H, M = mu.shape
+        w = np.asarray(weights, dtype=float)
+        tot = np.bincount(owner, w, minlength=n)
+        wn = w / np.where(tot > 0, tot, 1.0)[owner]
+        wm = np.maximum(wn[:, None] * mu, 1e-300)  # (H, M)
+        mu_new = np.zeros((n, M))
+        np.add.at(mu_new, owner, wm)
+        dom = np.zeros(n, np.int64)
+        order = np.lexsort((-wn, owner))
+        first = np.ones(order.size, bool)
+        first[1:] = owner[order][1:] != owner[order][:-1]
+        dom[owner[order][first]] = order[first]
+        X = np.empty((n, M) + models.x.shape[2:])
+        PP = np.empty((n, M) + models.P.shape[2:])
+        for j in range(M):
+            X[:, j], PP[:, j] = moment_match(models.x[:, j], models.P[:, j], wm[:, j], owner, n)
+        mu_new /= mu_new.sum(1, keepdims=True)
+        new_models = models.take(dom).replace(x=X, P=PP)
+        _, x, P, _ = combine(X, PP, mu_new, np.zeros_like(mu_new), self._out)
+        return states.take(dom).replace(x=x, P=P, aux={MODELS: new_models, MU: mu_new})

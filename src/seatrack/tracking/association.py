@@ -8,12 +8,11 @@ against the track's miss weight ``l_i0 = log(1 - Pd Pg)``.
 * **GNN** (:func:`gnn`): the joint assignment -- each track takes at most one plot, each
   plot at most one track -- that maximises ``sum l_ij`` over assigned pairs plus
   ``sum l_i0`` over unassigned tracks. A pair with ``l_ij <= l_i0`` is never worth
-  assigning and is dropped. Tracks whose plots no other track wants pick their best plot
-  directly (vectorised); the clusters of tracks sharing plots are solved exactly, all at
-  once, as a sparse minimum-weight full bipartite matching
-  (:func:`scipy.sparse.csgraph.min_weight_full_bipartite_matching`, the sparse form of
-  :func:`scipy.optimize.linear_sum_assignment`) of the tracks to the plots plus one dummy
-  "no plot" column per track, with weights ``C - (l_ij - l_i0)``.
+  assigning and is dropped. One compiled pass (:func:`gnn`) finds the clusters of tracks
+  that share plots (union-find); a track alone takes its best plot, a cluster is solved
+  exactly as a dense rectangular assignment of its tracks to its plots plus one "no plot"
+  column per track, by the shortest augmenting path method (Crouse 2016, the algorithm of
+  :func:`scipy.optimize.linear_sum_assignment`), with costs ``-(l_ij - l_i0)`` and 0.
 * **JPDA** (:func:`jpda`): the marginal association probabilities ``beta_ij`` and
   ``beta_i0`` over every feasible joint event (each plot used at most once) of a cluster
   of interacting tracks, the event weight being the product of its ``exp(l)``. Tracks
@@ -31,9 +30,10 @@ from collections import defaultdict
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
-from scipy.sparse import coo_matrix, csr_matrix
-from scipy.sparse.csgraph import connected_components, min_weight_full_bipartite_matching
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -91,37 +91,150 @@ def gnn(track: IntArray, plot: IntArray, gain: FloatArray, n_tracks: int, n_plot
     """
     out = np.full(n_tracks, -1, np.int64)
     keep = gain > 0
-    track, plot, gain = track[keep], plot[keep], gain[keep]
-    if track.size == 0:
-        return out
-    hot = contested(track, plot, n_tracks, n_plots)
-    # uncontested tracks: the best of their own plots
-    t, p, g = track[~hot], plot[~hot], gain[~hot]
-    order = np.lexsort((-g, t))
-    first = np.ones(order.size, bool)
-    first[1:] = t[order][1:] != t[order][:-1]
-    out[t[order][first]] = p[order][first]
-    if hot.any():
-        _gnn_sparse(track[hot], plot[hot], gain[hot], n_tracks, n_plots, out)
+    if keep.any():
+        _gnn_kernel(
+            np.ascontiguousarray(track[keep], dtype=np.int64),
+            np.ascontiguousarray(plot[keep], dtype=np.int64),
+            np.ascontiguousarray(gain[keep], dtype=np.float64),
+            n_tracks,
+            n_plots,
+            out,
+        )
     return out
 
 
-def _gnn_sparse(
-    track: IntArray, plot: IntArray, gain: FloatArray, n_tracks: int, n_plots: int, out: IntArray
-) -> None:
-    """Optimal assignment of every contested cluster at once: one sparse minimum-weight
-    full matching of the tracks to the plots plus one dummy column ("no plot") per track,
-    edge weights ``C - gain`` (``C`` above every gain) and ``C`` for the dummies."""
-    ut, it = np.unique(track, return_inverse=True)
-    nt = ut.size
-    c0 = float(gain.max()) + 1.0
-    rows = np.concatenate([it, np.arange(nt)])
-    cols = np.concatenate([plot, n_plots + np.arange(nt)])
-    w = np.concatenate([c0 - gain, np.full(nt, c0)])
-    m = csr_matrix((w, (rows, cols)), shape=(nt, n_plots + nt))
-    r, c = min_weight_full_bipartite_matching(m)
-    ok = c < n_plots
-    out[ut[r[ok]]] = c[ok]
+@njit(cache=True)
+def _find(parent, a):  # pragma: no cover - compiled
+    while parent[a] != a:
+        parent[a] = parent[parent[a]]
+        a = parent[a]
+    return a
+
+
+@njit(cache=True)
+def _gnn_kernel(track, plot, gain, n_tracks, n_plots, out):  # pragma: no cover - compiled
+    """Clusters by union-find, then the best plot of lone tracks and an exact dense
+    assignment of every cluster (see :func:`gnn`)."""
+    K = track.size
+    parent = np.arange(n_tracks + n_plots)
+    for k in range(K):
+        a = _find(parent, track[k])
+        b = _find(parent, n_tracks + plot[k])
+        if a != b:
+            parent[b] = a
+    root = np.empty(K, np.int64)
+    for k in range(K):
+        root[k] = _find(parent, track[k])
+    order = np.argsort(root, kind="mergesort")
+    row = np.full(n_tracks, -1, np.int64)  # local row of a track in its cluster
+    col = np.full(n_plots, -1, np.int64)
+    start = 0
+    while start < K:
+        stop = start
+        while stop < K and root[order[stop]] == root[order[start]]:
+            stop += 1
+        nt = 0
+        npl = 0
+        for q in range(start, stop):
+            k = order[q]
+            if row[track[k]] < 0:
+                row[track[k]] = nt
+                nt += 1
+            if col[plot[k]] < 0:
+                col[plot[k]] = npl
+                npl += 1
+        if nt == 1:  # a lone track: its best plot
+            best = order[start]
+            for q in range(start + 1, stop):
+                if gain[order[q]] > gain[best]:
+                    best = order[q]
+            out[track[best]] = plot[best]
+        else:
+            C = np.full((nt, npl + nt), np.inf)
+            C[:, npl:] = 0.0
+            rows = np.empty(nt, np.int64)
+            cols = np.empty(npl, np.int64)
+            for q in range(start, stop):
+                k = order[q]
+                C[row[track[k]], col[plot[k]]] = -gain[k]
+                rows[row[track[k]]] = track[k]
+                cols[col[plot[k]]] = plot[k]
+            c4r = _lap(C)
+            for i in range(nt):
+                if c4r[i] < npl:
+                    out[rows[i]] = cols[c4r[i]]
+        for q in range(start, stop):  # reset the local maps
+            row[track[order[q]]] = -1
+            col[plot[order[q]]] = -1
+        start = stop
+
+
+@njit(cache=True)
+def _lap(C):  # pragma: no cover - compiled
+    """Minimum-cost assignment of every row of ``C (nr, nc)``, ``nr <= nc`` (``inf``:
+    forbidden; a feasible assignment must exist): the column of each row. Shortest
+    augmenting paths with dual variables (Crouse 2016)."""
+    nr, nc = C.shape
+    u = np.zeros(nr)
+    v = np.zeros(nc)
+    shortest = np.empty(nc)
+    path = np.full(nc, -1, np.int64)
+    col4row = np.full(nr, -1, np.int64)
+    row4col = np.full(nc, -1, np.int64)
+    SR = np.zeros(nr, np.bool_)
+    SC = np.zeros(nc, np.bool_)
+    remaining = np.empty(nc, np.int64)
+    for cur in range(nr):
+        for j in range(nc):
+            remaining[j] = nc - 1 - j
+            shortest[j] = np.inf
+            SC[j] = False
+        SR[:] = False
+        n_rem = nc
+        min_val = 0.0
+        i = cur
+        sink = -1
+        while sink == -1:
+            index = -1
+            lowest = np.inf
+            SR[i] = True
+            for it in range(n_rem):
+                j = remaining[it]
+                r = min_val + C[i, j] - u[i] - v[j]
+                if r < shortest[j]:
+                    path[j] = i
+                    shortest[j] = r
+                if shortest[j] < lowest or (shortest[j] == lowest and row4col[j] == -1):
+                    lowest = shortest[j]
+                    index = it
+            min_val = lowest
+            if index < 0 or min_val == np.inf:  # infeasible (cannot happen with dummies)
+                return col4row
+            j = remaining[index]
+            if row4col[j] == -1:
+                sink = j
+            else:
+                i = row4col[j]
+            SC[j] = True
+            n_rem -= 1
+            remaining[index] = remaining[n_rem]
+        u[cur] += min_val
+        for i2 in range(nr):
+            if SR[i2] and i2 != cur:
+                u[i2] += min_val - shortest[col4row[i2]]
+        for j in range(nc):
+            if SC[j]:
+                v[j] -= min_val - shortest[j]
+        j = sink
+        while True:
+            i2 = path[j]
+            row4col[j] = i2
+            tmp = col4row[i2]
+            col4row[i2] = j
+            j = tmp
+            if i2 == cur:
+                break
+    return col4row
 
 
 # ---------------------------------------------------------------------------

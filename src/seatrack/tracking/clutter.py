@@ -12,9 +12,12 @@ space.
   ``min_gap_deg`` in a 1-degree histogram after ``min_plots`` plots, as a sector-scanning
   radar does), and the elevation and range-rate spans when the plots have them.
 * :class:`ClutterRate` estimates ``n_c`` when it is not given: the plots of each scan that
-  no confirmed track explains (for JPDA: the scan's plots minus the sum of the association
-  probabilities), averaged over the scans with an exponential memory of ``memory`` scans.
-  The first scan has no tracks, so the estimate starts high and settles as tracks form.
+  no track explains -- the scan's plots minus the expected number of target plots among
+  them (each associated plot weighted by its track's existence probability; for JPDA the
+  association probabilities) -- averaged over the scans with an exponential memory of
+  ``memory`` scans. The plots that start a new track are taken out of the count of their
+  own, earlier scan when the track starts (:meth:`ClutterRate.explain_earlier`), so the
+  first scans, which have no tracks yet, do not leave the estimate high.
 * :class:`DetectionRate` estimates the detection probability: of the confirmed tracks
   updated at a scan, the share updated again at the next.
 """
@@ -43,6 +46,7 @@ class SurveillanceRegion:
         self.lo = np.full(3, np.inf)  # range, elevation, range rate
         self.hi = np.full(3, -np.inf)
         self.n = 0
+        self._span: tuple[tuple[int, bool], float] | None = None  # cached azimuth span
 
     def update(self, plots: Plots) -> None:
         """Add the plots of one scan."""
@@ -60,10 +64,15 @@ class SurveillanceRegion:
         """Azimuth sector covered, rad (2 pi unless a large empty gap has shown)."""
         if self.n < self.min_plots:
             return 2 * math.pi
+        key = (int(np.count_nonzero(self.az_hist)), True)  # the gaps change only with it
+        if self._span is not None and self._span[0] == key:
+            return self._span[1]
         empty = np.concatenate([self.az_hist, self.az_hist]) == 0  # circular: twice round
         edges = np.flatnonzero(np.diff(np.concatenate([[0], empty.astype(np.int8), [0]])))
         gap = min(int((edges[1::2] - edges[::2]).max(initial=0)), 360)
-        return 2 * math.pi if gap < self.min_gap_bins else math.radians(360 - gap)
+        span = 2 * math.pi if gap < self.min_gap_bins else math.radians(360 - gap)
+        self._span = (key, span)
+        return span
 
     def volume(self, elevation: bool, range_rate: bool) -> float:
         """Volume of the region in the innovation space of the filter (> 0)."""
@@ -86,9 +95,14 @@ class ClutterRate:
         self.weight = 0.0
 
     def update(self, n_clutter: float) -> None:
-        """Add one scan's count of plots that no confirmed track explains."""
+        """Add one scan's count of plots that no track explains."""
         self.sum = self.forget * self.sum + max(n_clutter, 0.0)
         self.weight = self.forget * self.weight + 1.0
+
+    def explain_earlier(self, n_explained: float, scans_ago: float) -> None:
+        """Plots of the scan ``scans_ago`` scans back (counted as clutter then) turned out to
+        be target plots: take their expected number out of that scan's count."""
+        self.sum = max(self.sum - self.forget**scans_ago * max(n_explained, 0.0), 0.0)
 
     @property
     def per_scan(self) -> float:

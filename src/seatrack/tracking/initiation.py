@@ -34,14 +34,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.spatial import cKDTree
 
 from seatrack.filters.base import Plots, SensorNoise
 from seatrack.tracking.association import gnn
-from seatrack.tracking.gating import MARGIN, SLACK, ball_pairs, gate_threshold
+from seatrack.tracking.gating import MARGIN, SLACK, gate_threshold, nis_logpdf, pregate
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -108,8 +108,7 @@ def speed_gate_pairs(
         raise ValueError("speed gate: the earlier plots must be earlier than this scan")
     reach = max_speed * float(dt1.max())
     radius = reach + MARGIN * np.sqrt(2 * gamma) * _noise_radius(p2, C2, sensor_pos, reach)
-    counts, i = ball_pairs(cKDTree(p1), p2, radius + SLACK)
-    j = np.repeat(np.arange(len(p2), dtype=np.int64), counts)
+    j, i = pregate(p2, radius + SLACK, p1)
     if i.size == 0:
         return InitPairs(e, e.copy())
     dt = dt1[i]
@@ -117,25 +116,27 @@ def speed_gate_pairs(
     dist = np.linalg.norm(delta, axis=1)
     excess = delta * np.maximum(0.0, 1.0 - max_speed * dt / np.maximum(dist, 1e-9))[:, None]
     C = C1[i] + C2[j]
-    ok = _mahalanobis(excess, C) <= gamma
+    ok = nis_logpdf(excess, C)[0] <= gamma
     i, j, delta, C, dt = i[ok], j[ok], delta[ok], C[ok], dt[ok]
     sigma_v = max_speed / math.sqrt(6.0)  # uniform speed up to max_speed, random course
     prior = C + np.eye(d) * ((sigma_v * dt) ** 2)[:, None, None]
-    cost = _mahalanobis(delta, prior) + np.log(np.linalg.det(prior))
-    chosen = gnn(j, i, _PAIR_BONUS - cost, len(p2), len(p1))
+    log_like = nis_logpdf(delta, prior)[1]  # -(Mahalanobis + log det + d log 2 pi) / 2
+    chosen = gnn(j, i, _PAIR_BONUS + 2.0 * log_like, len(p2), len(p1))
     second = np.flatnonzero(chosen >= 0)
     return InitPairs(chosen[second], second.astype(np.int64))
 
 
-def polar_covariance(plots: Plots, sensor: SensorNoise) -> FloatArray:
-    """Cartesian covariance ``(N, d, d)`` of plot positions: the linearised polar noise in
-    closed form, ``sigma_r^2 u u^T + (r cos(el) sigma_az)^2 a a^T [+ (r sigma_el)^2 e e^T]``
-    with ``u``, ``a``, ``e`` the unit vectors along range, azimuth and elevation (equal to
-    the covariance of :func:`seatrack.filters.base.plot_gaussian`, without its matrix
+def polar_covariance(plots: Plots, sensor: SensorNoise, idx: IntArray | None = None) -> FloatArray:
+    """Cartesian covariance ``(N, d, d)`` of plot positions (of the plots ``idx`` when
+    given): the linearised polar noise in closed form,
+    ``sigma_r^2 u u^T + (r cos(el) sigma_az)^2 a a^T [+ (r sigma_el)^2 e e^T]`` with ``u``,
+    ``a``, ``e`` the unit vectors along range, azimuth and elevation (equal to the
+    covariance of :func:`seatrack.filters.base.plot_gaussian`, without its matrix
     inverses)."""
-    az = plots.azimuth
+    sel: Any = slice(None) if idx is None else idx
+    az = plots.azimuth[sel]
     sa, ca = np.sin(az), np.cos(az)
-    r = plots.range
+    r = plots.range[sel]
     if plots.elevation is None:
         u = np.stack([sa, ca], -1)
         a = np.stack([ca, -sa], -1)
@@ -143,7 +144,7 @@ def polar_covariance(plots: Plots, sensor: SensorNoise) -> FloatArray:
             sensor.sigma_range**2 * u[:, :, None] * u[:, None, :]
             + ((r * sensor.sigma_azimuth) ** 2)[:, None, None] * a[:, :, None] * a[:, None, :]
         )
-    el = plots.elevation
+    el = plots.elevation[sel]
     se, ce = np.sin(el), np.cos(el)
     u = np.stack([ce * sa, ce * ca, se], -1)
     a = np.stack([ca, -sa, np.zeros_like(sa)], -1)
@@ -154,12 +155,6 @@ def polar_covariance(plots: Plots, sensor: SensorNoise) -> FloatArray:
         + ((r * ce * sensor.sigma_azimuth) ** 2)[:, None, None] * outer(a)
         + ((r * sensor.sigma_elevation) ** 2)[:, None, None] * outer(e)
     )
-
-
-def _mahalanobis(v: FloatArray, C: FloatArray) -> FloatArray:
-    if v.shape[0] == 0:
-        return np.zeros(0)
-    return np.asarray(np.einsum("ki,ki->k", v, np.linalg.solve(C, v[..., None])[..., 0]))
 
 
 # ---------------------------------------------------------------------------

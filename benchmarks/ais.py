@@ -223,6 +223,41 @@ def print_scale(cases: list[dict[str, Any]], flush: bool = False) -> None:
         )
 
 
+def scale_cases(args: argparse.Namespace, tmpd: Path) -> None:
+    """The hourly-files and DMA-day cases (a case with 0 reports is skipped)."""
+    cases: list[dict[str, Any]] = []
+    hourly = args.hourly_reports // (20 if args.quick else 1)
+    dma = args.dma_reports // (60 if args.quick else 1)
+    gen = 0.0
+    if hourly > 0:
+        t = time.perf_counter()
+        files = hourly_files(tmpd, hourly, max(hourly // 3000, 10))
+        gen += time.perf_counter() - t
+        c = scale_case("three hourly files (common)", files, hourly, "1G", args.repeat, tmpd)
+        c["target"] = (">=150k rep/s, <=1024 MB", c["rate"] >= 150e3 and c["rss"] <= 1024)
+        cases.append(c)
+        print_scale(cases, flush=True)
+        for f in files:
+            f.unlink()
+    if dma > 0:
+        t = time.perf_counter()
+        day = tmpd / "aisdk_day.csv"
+        write_csv(day, vessels(dma, max(dma // 3750, 10), seed=2, span=86400.0), "dma")
+        gen += time.perf_counter() - t
+        c = scale_case("DMA-shaped day (26 columns)", [day], dma, "4G", args.repeat, tmpd)
+        c["target"] = ("<=120 s, <=4096 MB", c["wall"] <= 120 and c["rss"] <= 4096)
+        cases.append(c)
+        print_scale(cases)
+        day.unlink()
+    if cases:
+        print(
+            f"(seatrack ais in a child process, wall = best of {args.repeat}, cpu = user + "
+            f"system of that run, peak = its maximum resident set; pyarrow read = "
+            f"pyarrow.csv.read_csv of the same files, all columns, best of 2; files "
+            f"generated in {gen:.0f} s)"
+        )
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="smoke run (small files)")
@@ -260,32 +295,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"synthetic without the refinement pass: track {fast['rate_track']:,.0f} rep/s"
             )
         if not args.skip_scale:
-            cases = []
-            hourly = args.hourly_reports // (20 if args.quick else 1)
-            dma = args.dma_reports // (60 if args.quick else 1)
-            t = time.perf_counter()
-            files = hourly_files(tmpd, hourly, max(hourly // 3000, 10))
-            gen = time.perf_counter() - t
-            c = scale_case("three hourly files (common)", files, hourly, "1G", args.repeat, tmpd)
-            c["target"] = (">=150k rep/s, <=1024 MB", c["rate"] >= 150e3 and c["rss"] <= 1024)
-            cases.append(c)
-            print_scale(cases, flush=True)
-            for f in files:
-                f.unlink()
-            t = time.perf_counter()
-            day = tmpd / "aisdk_day.csv"
-            write_csv(day, vessels(dma, max(dma // 3750, 10), seed=2, span=86400.0), "dma")
-            gen += time.perf_counter() - t
-            c = scale_case("DMA-shaped day (26 columns)", [day], dma, "4G", args.repeat, tmpd)
-            c["target"] = ("<=120 s, <=4096 MB", c["wall"] <= 120 and c["rss"] <= 4096)
-            cases.append(c)
-            print_scale(cases)
-            print(
-                f"(seatrack ais in a child process, wall = best of {args.repeat}, cpu = user + "
-                f"system of that run, peak = its maximum resident set; pyarrow read = "
-                f"pyarrow.csv.read_csv of the same files, all columns, best of 2; files "
-                f"generated in {gen:.0f} s)"
-            )
+            scale_cases(args, tmpd)
     print(f"load average after: {os.getloadavg()[0]:.1f}")
     return 0
 

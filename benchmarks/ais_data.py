@@ -60,6 +60,12 @@ def vessels(
     """Reports of ``n_vessels`` vessels (``n_reports`` in all), sorted by time over all
     vessels (as a national export is); ``span`` > 0 spreads the vessels' start over it."""
     rng = np.random.default_rng(seed)
+    n_vessels = max(min(n_vessels, n_reports), 1)  # every vessel has a report
+    if n_reports <= 0:
+        empty = np.zeros(0)
+        return {k: empty for k in ("t", "lat", "lon", "sog", "cog")} | {
+            "mmsi": np.zeros(0, dtype=np.int64)
+        }
     per = np.full(n_vessels, n_reports // n_vessels)
     per[: n_reports - per.sum()] += 1
     vid = np.repeat(np.arange(n_vessels), per)

@@ -48,6 +48,9 @@ __all__ = [
     "KernelOutputs",
     "kernel_params",
     "run_kernel",
+    "vessel_chunks",
+    "vessel_layout",
+    "vessel_starts",
 ]
 
 
@@ -614,6 +617,21 @@ def vessel_chunks(starts: NDArray[np.int64], n_chunks: int) -> NDArray[np.int64]
     k = max(1, min(n_chunks, n_v))
     cut = np.searchsorted(starts, np.linspace(0, starts[-1], k + 1)[1:-1], side="left")
     return np.unique(np.r_[0, np.clip(cut, 1, n_v - 1), n_v]).astype(np.int64)
+
+
+def vessel_starts(vessel: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Boundaries ``(V + 1,)`` of the runs of equal vessel ids (rows sorted by vessel)."""
+    vs = np.asarray(vessel)
+    if vs.size == 0:
+        return np.zeros(1, dtype=np.int64)
+    return np.flatnonzero(np.r_[True, vs[1:] != vs[:-1], True]).astype(np.int64)
+
+
+def vessel_layout(vessel: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
+    """Vessel boundaries (:func:`vessel_starts`) and the chunks of vessels that the compiled
+    stages run on numba's threads (:func:`vessel_chunks`, 8 per thread)."""
+    starts = vessel_starts(vessel)
+    return starts, vessel_chunks(starts, 8 * numba.get_num_threads())
 
 
 def run_kernel(inp: KernelInputs, cfg: AisTrackerConfig) -> KernelOutputs:

@@ -2,16 +2,18 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from numba import njit
+from numba import njit, prange
 from numpy.typing import NDArray
 
 from seatrack.filters.ais.config import CHI2_1_MEDIAN, AisTrackerConfig, trim_scale
-from seatrack.filters.ais.plausibility import neighbours
+from seatrack.filters.ais.kernel import vessel_layout
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["position_noise", "group_median", "group_trimmed_mean", "sorted_by_group"]
+__all__ = ["position_noise"]
 
 
 def position_noise(
@@ -56,112 +58,127 @@ def position_noise(
     at 1-3 s spacing): cross-track 0.1-0.6 m, along-track growing with speed
     (``sigma_time`` ~0.4-0.6 s), the along-track errors being mostly whole-second
     timestamp offsets of single reports.
+
+    Compiled, one vessel at a time on all threads (:func:`_noise_vessel`): each vessel's
+    values are sorted and summed in ascending order, the arithmetic of the vectorised
+    formulas above term by term.
     """
     n = t.size
-    tau_floor = config.sigma_time_min_s
     out = np.empty((n, 2))
-    out[:, 0] = config.sigma_pos_m
-    out[:, 1] = tau_floor
     if n == 0:
         return out
-    ip, inn, has_p, has_n = neighbours(vessel, use)
-    dtp = t - t[ip]
-    dtn = t[inn] - t
-    lim = config.noise_max_dt_s
-    ok = use & has_p & has_n & (dtp > 0) & (dtn > 0) & (dtp <= lim) & (dtn <= lim)
-    idx = np.flatnonzero(ok)
-    if idx.size == 0:
-        return out
-    span = dtp[idx] + dtn[idx]
-    w = dtp[idx] / span
-    c = 1.0 + w**2 + (1.0 - w) ** 2
-    chord = xy[inn[idx]] - xy[ip[idx]]
-    r = xy[idx] - (xy[ip[idx]] + w[:, None] * chord)
-    length = np.hypot(chord[:, 0], chord[:, 1])
-    ux = np.where(length > 0, chord[:, 0] / np.where(length > 0, length, 1.0), 1.0)
-    uy = np.where(length > 0, chord[:, 1] / np.where(length > 0, length, 1.0), 0.0)
-    r_along = r[:, 0] * ux + r[:, 1] * uy
-    r_cross = -r[:, 0] * uy + r[:, 1] * ux
-    speed = length / span
-    vid = vessel[idx]
-    uv, inv = np.unique(vid, return_inverse=True)
-    s_pos2 = group_trimmed_mean(inv, uv.size, r_cross**2 / c, config.noise_trim)
-    n_all = np.bincount(inv, minlength=uv.size)
-    s_pos2 = np.where(n_all >= config.noise_min_reports, s_pos2, config.sigma_pos_m**2)
-    s_pos = np.clip(np.sqrt(s_pos2), config.sigma_pos_min_m, config.sigma_pos_m)
-    mv = speed >= config.noise_min_speed_mps
-    sp2 = np.where(mv, speed, 1.0) ** 2
-    g = np.where(mv, inv, uv.size)  # parked rows go to an extra group
-    tau2 = group_median(g, uv.size + 1, r_along**2 / (c * sp2))[:-1] / CHI2_1_MEDIAN
-    tau2 -= s_pos**2 * group_median(g, uv.size + 1, 1.0 / sp2)[:-1]
-    n_mv = np.bincount(g, minlength=uv.size + 1)[:-1]
-    tau2 = np.where(n_mv >= config.noise_min_reports, tau2, 0.0)
-    s_tau = np.clip(np.sqrt(np.maximum(tau2, 0.0)), tau_floor, config.noise_max_time_s)
-    vi = np.minimum(np.searchsorted(uv, vessel), uv.size - 1)
-    known = uv[vi] == vessel
-    out[known, 0] = s_pos[vi[known]]
-    out[known, 1] = s_tau[vi[known]]
-    return out
-
-
-def group_trimmed_mean(
-    group: NDArray[np.int64], n_groups: int, x: FloatArray, keep: float
-) -> FloatArray:
-    """Per-group variance estimate from chi-square(1)-distributed ``x = r^2 / var``: the mean
-    of the smallest fraction ``keep`` of each group's values, divided by its expectation
-    ``E[X | X <= chi2_1(keep)] = F_3(chi2_1(keep)) / keep`` (``x f_1(x) = f_3(x)``)."""
-    xs, count = sorted_by_group(group, x, n_groups)
-    gs = np.repeat(np.arange(n_groups), count)
-    first = np.r_[0, np.cumsum(count)[:-1]]
-    n_keep = np.maximum(np.ceil(keep * count).astype(np.int64), 1)
-    rank = np.arange(xs.size) - first[gs]
-    kept = rank < n_keep[gs]
-    tot = np.bincount(gs[kept], weights=xs[kept], minlength=n_groups)
-    scale = trim_scale(keep)
-    out = np.full(n_groups, np.nan)
-    has = count > 0
-    out[has] = tot[has] / n_keep[has] / scale
-    return out
-
-
-def group_median(group: NDArray[np.int64], n_groups: int, x: FloatArray) -> FloatArray:
-    """Median of ``x`` per group ``0..n_groups-1`` (NaN for empty groups), vectorised."""
-    xs, count = sorted_by_group(group, x, n_groups)
-    first = np.r_[0, np.cumsum(count)[:-1]]
-    out = np.full(n_groups, np.nan)
-    has = count > 0
-    lo = first[has] + (count[has] - 1) // 2
-    hi = first[has] + count[has] // 2
-    out[has] = 0.5 * (xs[lo] + xs[hi])
-    return out
-
-
-@njit(cache=True)
-def _sorted_by_group(group, x, n_groups):  # pragma: no cover - compiled
-    count = np.zeros(n_groups, dtype=np.int64)
-    for g in group:
-        count[g] += 1
-    start = np.zeros(n_groups + 1, dtype=np.int64)
-    for g in range(n_groups):
-        start[g + 1] = start[g] + count[g]
-    out = np.empty(x.size)
-    pos = start[:-1].copy()
-    for i in range(x.size):
-        g = group[i]
-        out[pos[g]] = x[i]
-        pos[g] += 1
-    for g in range(n_groups):
-        out[start[g] : start[g + 1]].sort()
-    return out, count
-
-
-def sorted_by_group(
-    group: NDArray[np.int64], x: FloatArray, n_groups: int
-) -> tuple[FloatArray, NDArray[np.int64]]:
-    """``x`` sorted by (group, value) -- ``x[np.lexsort((x, group))]`` by a counting sort of
-    the groups and a sort within each -- and the count of each group ``0..n_groups-1``."""
-    return _sorted_by_group(
-        np.ascontiguousarray(group, dtype=np.int64),
-        np.ascontiguousarray(x, dtype=np.float64),
-        n_groups,
+    starts, chunks = vessel_layout(vessel)
+    c = np.ascontiguousarray
+    _noise_kernel(
+        starts,
+        chunks,
+        c(t, dtype=np.float64),
+        c(xy, dtype=np.float64),
+        c(use, dtype=np.bool_),
+        _noise_params(config),
+        out,
     )
+    return out
+
+
+def _noise_params(cfg: AisTrackerConfig) -> tuple[float, ...]:
+    """The constants of :func:`_noise_vessel` (computed here as the formulas do)."""
+    return (
+        float(cfg.noise_max_dt_s),
+        float(cfg.noise_min_reports),
+        float(cfg.noise_trim),
+        float(trim_scale(cfg.noise_trim)),
+        float(cfg.sigma_pos_m**2),
+        float(cfg.sigma_pos_min_m),
+        float(cfg.sigma_pos_m),
+        float(cfg.sigma_time_min_s),
+        float(cfg.noise_max_time_s),
+        float(cfg.noise_min_speed_mps),
+        float(CHI2_1_MEDIAN),
+    )
+
+
+@njit(cache=True, inline="always")
+def _clip(x, lo, hi):  # pragma: no cover - compiled
+    """``np.clip`` of a scalar (NaN stays NaN)."""
+    if x != x:
+        return x
+    return min(max(x, lo), hi)
+
+
+@njit(cache=True, inline="always")
+def _median_sorted(x, n):  # pragma: no cover - compiled
+    return 0.5 * (x[(n - 1) // 2] + x[n // 2])
+
+
+@njit(cache=True, nogil=True)
+def _noise_vessel(a, b, t, xy, use, par, xc, xa, xi, out):  # pragma: no cover - compiled
+    """:func:`position_noise` of the vessel on rows ``a..b-1`` (``par``: :func:`_noise_params`;
+    ``xc``, ``xa``, ``xi`` scratch of at least ``b - a`` values)."""
+    lim, min_reports, keep, scale, sig2_default, s_min, s_max = par[:7]
+    tau_floor, tau_max, min_speed, chi2_median = par[7:]
+    n_all = 0
+    n_mv = 0
+    p = -1  # the used reports p, i, j: the residual of i against the chord p-j
+    i = -1
+    for j in range(a, b):
+        if not use[j]:
+            continue
+        if p >= 0:
+            dtp = t[i] - t[p]
+            dtn = t[j] - t[i]
+            if dtp > 0 and dtn > 0 and dtp <= lim and dtn <= lim:
+                span = dtp + dtn
+                w = dtp / span
+                c = 1.0 + w * w + (1.0 - w) * (1.0 - w)
+                chx = xy[j, 0] - xy[p, 0]
+                chy = xy[j, 1] - xy[p, 1]
+                rx = xy[i, 0] - (xy[p, 0] + w * chx)
+                ry = xy[i, 1] - (xy[p, 1] + w * chy)
+                length = math.hypot(chx, chy)
+                ux, uy = (chx / length, chy / length) if length > 0 else (1.0, 0.0)
+                r_along = rx * ux + ry * uy
+                r_cross = -rx * uy + ry * ux
+                speed = length / span
+                xc[n_all] = r_cross * r_cross / c
+                n_all += 1
+                if speed >= min_speed:
+                    sp2 = speed * speed
+                    xa[n_mv] = r_along * r_along / (c * sp2)
+                    xi[n_mv] = 1.0 / sp2
+                    n_mv += 1
+        p = i
+        i = j
+    s_pos, s_tau = s_max, tau_floor
+    if n_all > 0:
+        xc[:n_all].sort()
+        n_keep = max(math.ceil(keep * n_all), 1)
+        tot = 0.0
+        for k in range(n_keep):
+            tot += xc[k]
+        s_pos2 = tot / n_keep / scale if n_all >= min_reports else sig2_default
+        s_pos = _clip(math.sqrt(s_pos2), s_min, s_max)
+        tau2 = 0.0
+        if n_mv >= min_reports:
+            tau2 = np.nan
+            if n_mv > 0:
+                xa[:n_mv].sort()
+                xi[:n_mv].sort()
+                tau2 = _median_sorted(xa, n_mv) / chi2_median
+                tau2 -= s_pos * s_pos * _median_sorted(xi, n_mv)
+        s_tau = _clip(math.sqrt(tau2 if not tau2 < 0.0 else 0.0), tau_floor, tau_max)
+    for r in range(a, b):
+        out[r, 0] = s_pos
+        out[r, 1] = s_tau
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _noise_kernel(starts, chunks, t, xy, use, par, out):  # pragma: no cover - compiled
+    """:func:`_noise_vessel` of every vessel, chunk by chunk on all threads."""
+    for c in prange(chunks.size - 1):
+        size = 1
+        for v in range(chunks[c], chunks[c + 1]):
+            size = max(size, starts[v + 1] - starts[v])
+        xc, xa, xi = np.empty(size), np.empty(size), np.empty(size)
+        for v in range(chunks[c], chunks[c + 1]):
+            _noise_vessel(starts[v], starts[v + 1], t, xy, use, par, xc, xa, xi, out)

@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit
+from numba import njit, prange
 from numpy.typing import NDArray
 
 from seatrack.filters.ais.config import NX, AisTrackerConfig
@@ -19,8 +20,8 @@ __all__ = [
     "apply_offsets",
     "estimate_prior",
     "offset_scores",
-    "pos_cov",
     "prior_counts",
+    "std_offset_scores",
     "timestamp_offsets",
 ]
 
@@ -28,62 +29,93 @@ __all__ = [
 MIN_OFFSET_REPORTS = 100
 
 
-def pos_cov(std: FloatArray) -> FloatArray:
-    """Position covariance ``(N, 2, 2)`` from the kernel's std output (sigma x, sigma y in
-    the first two columns, the x-y covariance in the last)."""
-    c = np.empty((std.shape[0], 2, 2))
-    c[:, 0, 0] = std[:, 0] ** 2
-    c[:, 1, 1] = std[:, 1] ** 2
-    c[:, 0, 1] = c[:, 1, 0] = std[:, NX]
-    return c
+@njit(cache=True, error_model="numpy", inline="always")
+def _score_row(
+    ex, ey, vx, vy, d_old, a00, a01, a10, a11, sp, st, st_fine, cand, loo, q
+):  # pragma: no cover - compiled
+    """``q[k] = r_d^T C^-1 r_d`` of :func:`timestamp_offsets` for one row (residual ``e``
+    of ``d = 0``, velocity ``v``, smoothed position covariance ``A``) and every candidate
+    offset ``cand[k]`` (2x2 algebra written out; a degenerate row scores 0 at ``d = 0``)."""
+    s2 = sp * sp
+    c00 = s2 + st_fine * st_fine * vx * vx
+    c01 = st_fine * st_fine * vx * vy
+    c11 = s2 + st_fine * st_fine * vy * vy
+    if loo:
+        # R of the run, its inverse; X = I - A R^-1; B = X^-1; e = B r; M = B A
+        t2 = st * st
+        r00 = s2 + t2 * vx * vx
+        r01 = t2 * vx * vy
+        r11 = s2 + t2 * vy * vy
+        dr = r00 * r11 - r01 * r01
+        i00, i01, i11 = r11 / dr, -r01 / dr, r00 / dr
+        x00 = 1.0 - (a00 * i00 + a01 * i01)
+        x01 = -(a00 * i01 + a01 * i11)
+        x10 = -(a10 * i00 + a11 * i01)
+        x11 = 1.0 - (a10 * i01 + a11 * i11)
+        dx = x00 * x11 - x01 * x10
+        b00, b01, b10, b11 = x11 / dx, -x01 / dx, -x10 / dx, x00 / dx
+        rx = ex + vx * d_old
+        ry = ey + vy * d_old
+        ex = b00 * rx + b01 * ry - vx * d_old
+        ey = b10 * rx + b11 * ry - vy * d_old
+        m00 = b00 * a00 + b01 * a10
+        m01 = 0.5 * ((b00 * a01 + b01 * a11) + (b10 * a00 + b11 * a10))
+        m11 = b10 * a01 + b11 * a11
+        c00 += m00
+        c01 += m01
+        c11 += m11
+    dc = c00 * c11 - c01 * c01
+    j00, j01, j11 = c11 / dc, -c01 / dc, c00 / dc
+    # (e + v d)^T C^-1 (e + v d) = a + 2 b d + c d^2
+    qa = j00 * ex * ex + 2.0 * j01 * ex * ey + j11 * ey * ey
+    qb = j00 * ex * vx + j01 * (ex * vy + ey * vx) + j11 * ey * vy
+    qc = j00 * vx * vx + 2.0 * j01 * vx * vy + j11 * vy * vy
+    for k in range(cand.shape[0]):
+        d = cand[k]
+        qk = qa + 2.0 * qb * d + qc * d * d
+        # a degenerate row (not finite): d = 0
+        q[k] = qk if math.isfinite(qk) else (0.0 if d == 0.0 else np.inf)
 
 
-@njit(cache=True, error_model="numpy")
-def _offset_scores(r0, v, d_old, A, sp, st, st_fine, cand, loo, q):  # pragma: no cover
-    """``q[i, k] = r_d^T C^-1 r_d`` of :func:`timestamp_offsets` for every row ``i`` and
-    candidate offset ``cand[k]`` (2x2 algebra written out; NaN for a degenerate row)."""
-    for i in range(r0.shape[0]):
-        vx, vy = v[i, 0], v[i, 1]
-        s2 = sp[i] * sp[i]
-        ex = r0[i, 0]
-        ey = r0[i, 1]
-        c00 = s2 + st_fine * st_fine * vx * vx
-        c01 = st_fine * st_fine * vx * vy
-        c11 = s2 + st_fine * st_fine * vy * vy
-        if loo:
-            # R of the run, its inverse; X = I - A R^-1; B = X^-1; e = B r; M = B A
-            t2 = st[i] * st[i]
-            r00 = s2 + t2 * vx * vx
-            r01 = t2 * vx * vy
-            r11 = s2 + t2 * vy * vy
-            dr = r00 * r11 - r01 * r01
-            i00, i01, i11 = r11 / dr, -r01 / dr, r00 / dr
-            a00, a01, a10, a11 = A[i, 0, 0], A[i, 0, 1], A[i, 1, 0], A[i, 1, 1]
-            x00 = 1.0 - (a00 * i00 + a01 * i01)
-            x01 = -(a00 * i01 + a01 * i11)
-            x10 = -(a10 * i00 + a11 * i01)
-            x11 = 1.0 - (a10 * i01 + a11 * i11)
-            dx = x00 * x11 - x01 * x10
-            b00, b01, b10, b11 = x11 / dx, -x01 / dx, -x10 / dx, x00 / dx
-            rx = ex + vx * d_old[i]
-            ry = ey + vy * d_old[i]
-            ex = b00 * rx + b01 * ry - vx * d_old[i]
-            ey = b10 * rx + b11 * ry - vy * d_old[i]
-            m00 = b00 * a00 + b01 * a10
-            m01 = 0.5 * ((b00 * a01 + b01 * a11) + (b10 * a00 + b11 * a10))
-            m11 = b10 * a01 + b11 * a11
-            c00 += m00
-            c01 += m01
-            c11 += m11
-        dc = c00 * c11 - c01 * c01
-        j00, j01, j11 = c11 / dc, -c01 / dc, c00 / dc
-        # (e + v d)^T C^-1 (e + v d) = a + 2 b d + c d^2
-        qa = j00 * ex * ex + 2.0 * j01 * ex * ey + j11 * ey * ey
-        qb = j00 * ex * vx + j01 * (ex * vy + ey * vx) + j11 * ey * vy
-        qc = j00 * vx * vx + 2.0 * j01 * vx * vy + j11 * vy * vy
-        for k in range(cand.shape[0]):
-            d = cand[k]
-            q[i, k] = qa + 2.0 * qb * d + qc * d * d
+@njit(cache=True, inline="always")
+def _cov(c00, c01, c10, c11, squared, i):  # pragma: no cover - compiled
+    """Position covariance of row ``i``: the four entries, or (``squared``) from the
+    kernel's std output: sigma x, the x-y covariance twice, sigma y."""
+    if squared:
+        return c00[i] * c00[i], c01[i], c10[i], c11[i] * c11[i]
+    return c00[i], c01[i], c10[i], c11[i]
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _scorable(state, c00, c01, c10, c11, squared, usable, ok):  # pragma: no cover - compiled
+    """Rows with a finite state (first four) and position covariance, and usable."""
+    for i in prange(ok.size):
+        a00, a01, a10, a11 = _cov(c00, c01, c10, c11, squared, i)
+        fin = (
+            math.isfinite(state[i, 0])
+            and math.isfinite(state[i, 1])
+            and math.isfinite(state[i, 2])
+            and math.isfinite(state[i, 3])
+        )
+        fin = fin and math.isfinite(a00) and math.isfinite(a01)
+        ok[i] = usable[i] and fin and math.isfinite(a10) and math.isfinite(a11)
+
+
+@njit(cache=True, nogil=True, parallel=True, error_model="numpy")
+def _score_rows(
+    idx, xy, state, c00, c01, c10, c11, squared, sig, d_old, st_fine, cand, loo, q, ident
+):  # pragma: no cover - compiled
+    """Scores ``q`` and identifiability of the rows ``idx`` (see :func:`offset_scores`)."""
+    for k in prange(idx.size):
+        i = idx[k]
+        a00, a01, a10, a11 = _cov(c00, c01, c10, c11, squared, i)
+        vx, vy = state[i, 2], state[i, 3]
+        ex, ey = xy[i, 0] - state[i, 0], xy[i, 1] - state[i, 1]
+        sp = sig[i, 0]
+        _score_row(
+            ex, ey, vx, vy, d_old[i], a00, a01, a10, a11, sp, sig[i, 1], st_fine, cand, loo, q[k]
+        )
+        ident[k] = vx * vx + vy * vy > 9.0 * (sp * sp)
 
 
 def timestamp_offsets(
@@ -179,37 +211,90 @@ def offset_scores(
     leave_one_out: bool = True,
 ) -> OffsetScores:
     """The scores of :func:`timestamp_offsets` (same parameters) before the prior."""
+    cov = (pos_cov[:, 0, 0], pos_cov[:, 0, 1], pos_cov[:, 1, 0], pos_cov[:, 1, 1])
+    return _scores(xy, state, cov, False, sig, used_offset, usable, config, leave_one_out)
+
+
+def std_offset_scores(
+    xy: FloatArray,
+    state: FloatArray,
+    std: FloatArray,
+    sig: FloatArray,
+    used_offset: FloatArray,
+    usable: NDArray[np.bool_],
+    config: AisTrackerConfig,
+    leave_one_out: bool = True,
+) -> OffsetScores:
+    """:func:`offset_scores` with the position covariance given by the kernel's std output
+    ``(N, 6)`` (sigma x, sigma y in the first two columns, the x-y covariance in the
+    last), without building the ``(N, 2, 2)`` array."""
+    cov = (std[:, 0], std[:, NX], std[:, NX], std[:, 1])
+    return _scores(xy, state, cov, True, sig, used_offset, usable, config, leave_one_out)
+
+
+def _scores(
+    xy: FloatArray,
+    state: FloatArray,
+    cov: tuple[FloatArray, ...],
+    squared: bool,
+    sig: FloatArray,
+    used_offset: FloatArray,
+    usable: NDArray[np.bool_],
+    config: AisTrackerConfig,
+    leave_one_out: bool,
+) -> OffsetScores:
     k_max = max(int(config.max_time_offset_s), 0)
     n = xy.shape[0]
-    ok = usable & np.isfinite(state[:, :4]).all(axis=1) & np.isfinite(pos_cov).all(axis=(1, 2))
-    if k_max == 0:
-        ok[:] = False
+    c = np.ascontiguousarray
+    c00, c01, c10, c11 = (c(x, dtype=np.float64) for x in cov)
+    ok = np.zeros(n, dtype=bool)
+    state = c(state, dtype=np.float64)
+    if k_max > 0 and n:
+        _scorable(state, c00, c01, c10, c11, squared, c(usable, dtype=np.bool_), ok)
     idx = np.flatnonzero(ok)
     cand = np.arange(-k_max, k_max + 1, dtype=np.float64)
-    v = state[ok, 2:4]
-    sp = sig[ok, 0]
-    r0 = xy[ok] - state[ok, :2]  # residual of d = 0: r_d = r0 + v d
-    q = np.empty((v.shape[0], cand.size))
-    _offset_scores(
-        r0,
-        v,
-        used_offset[ok],
-        pos_cov[ok],
-        sp,
-        sig[ok, 1],
-        config.sigma_time_fine_s,
-        cand,
-        leave_one_out,
-        q,
-    )
-    q = np.where(np.isfinite(q), q, np.where(cand == 0, 0.0, np.inf))  # degenerate: d = 0
-    ident = (v**2).sum(axis=1) > 9.0 * sp**2
+    q = np.empty((idx.size, cand.size))
+    ident = np.empty(idx.size, dtype=bool)
+    if idx.size:
+        _score_rows(
+            idx,
+            c(xy, dtype=np.float64),
+            state,
+            c00,
+            c01,
+            c10,
+            c11,
+            squared,
+            c(sig, dtype=np.float64),
+            c(used_offset, dtype=np.float64),
+            float(config.sigma_time_fine_s),
+            cand,
+            bool(leave_one_out),
+            q,
+            ident,
+        )
     return OffsetScores(idx, q, ident, n)
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _argmin_rows(q, log_prior, out):  # pragma: no cover - compiled
+    """``argmin(0.5 q - log_prior)`` of every row (the first of equal minima)."""
+    for i in prange(q.shape[0]):
+        best = 0
+        vbest = 0.5 * q[i, 0] - log_prior[0]
+        for k in range(1, q.shape[1]):
+            vk = 0.5 * q[i, k] - log_prior[k]
+            if vk < vbest:
+                best, vbest = k, vk
+        out[i] = best
 
 
 def _winners(scores: OffsetScores, prior: FloatArray) -> NDArray[np.int64]:
     """Index of the MAP candidate of every scored report."""
-    return np.argmin(0.5 * scores.q - np.log(prior), axis=1)
+    out = np.empty(scores.q.shape[0], dtype=np.int64)
+    if out.size:
+        _argmin_rows(scores.q, np.log(prior), out)
+    return out
 
 
 def prior_counts(scores: OffsetScores, prior: FloatArray) -> NDArray[np.int64]:

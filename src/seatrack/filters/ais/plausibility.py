@@ -9,9 +9,10 @@ rejected, and the vessels concerned are filtered again (:func:`revisit`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
+from numba import njit, prange
 from numpy.typing import NDArray
 
 from seatrack.filters.ais.config import AisTrackerConfig
@@ -21,12 +22,14 @@ from seatrack.filters.ais.kernel import (
     KernelOutputs,
     OutlierKind,
     run_kernel,
+    vessel_layout,
+    vessel_starts,
 )
 from seatrack.geometry import KNOT_MPS
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["Rows", "neighbours", "neighbour_plausibility", "revisit", "merge_outputs", "run_rows"]
+__all__ = ["Rows", "neighbour_plausibility", "revisit", "merge_outputs", "run_rows"]
 
 
 @dataclass(frozen=True)
@@ -48,19 +51,18 @@ class Rows:
     force: NDArray[np.int8]
     toff: FloatArray
 
-    def take(self, rows: NDArray[np.bool_], **new: NDArray) -> Rows:
-        """The rows ``rows`` (whole vessels), with fields replaced by ``new`` (full length)."""
+    def take(self, rows: NDArray[np.bool_] | None, **new: NDArray) -> Rows:
+        """The rows ``rows`` (whole vessels; None: all, not copied), with fields replaced by
+        ``new`` (full length)."""
+        if rows is None:
+            return replace(self, **new)
         fields = {k: new.get(k, getattr(self, k))[rows] for k in self.__dataclass_fields__}
         return Rows(**fields)
 
     def kernel_inputs(self) -> KernelInputs:
         """:class:`KernelInputs` (vessel boundaries from the sorted vessel ids)."""
-        vs = self.vessel
-        starts = np.flatnonzero(np.r_[True, vs[1:] != vs[:-1], True]).astype(np.int64)
-        if vs.size == 0:
-            starts = np.zeros(1, dtype=np.int64)
         return KernelInputs(
-            starts,
+            vessel_starts(self.vessel),
             self.t,
             self.z,
             self.use,
@@ -88,25 +90,6 @@ def merge_outputs(out: KernelOutputs, rows: NDArray[np.bool_], new: KernelOutput
         np.asarray(a_out)[rows] = a_new
 
 
-def neighbours(
-    vessel: NDArray[np.int64], accepted: NDArray[np.bool_]
-) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.bool_], NDArray[np.bool_]]:
-    """Nearest *other* accepted row of the same vessel before / after every row (rows sorted
-    by (vessel, time)): indices ``prev``, ``next`` (0 where none) and their masks."""
-    n = vessel.size
-    pos = np.arange(n)
-    acc_idx = np.where(accepted, pos, -1)
-    # previous accepted strictly before: shift the running max by one
-    prev = np.maximum.accumulate(np.r_[-1, acc_idx[:-1]]) if n else acc_idx
-    nxt_src = np.where(accepted, pos, n)
-    nxt = np.minimum.accumulate(np.r_[nxt_src[1:], n][::-1])[::-1] if n else nxt_src
-    has_p = prev >= 0
-    has_p[has_p] &= vessel[prev[has_p]] == vessel[has_p]
-    has_n = nxt < n
-    has_n[has_n] &= vessel[nxt[has_n]] == vessel[has_n]
-    return np.where(has_p, prev, 0), np.where(has_n, nxt, 0), has_p, has_n
-
-
 def neighbour_plausibility(
     vessel: NDArray[np.int64],
     t: FloatArray,
@@ -127,48 +110,188 @@ def neighbour_plausibility(
 
     with the noise allowance ``d0 = n_sigma sqrt(2) sigma_pos`` and the timestamp
     resolution ``tau`` (so that only reports implausible under the most generous reading
-    of the timestamps and noise score high).
+    of the timestamps and noise score high). Compiled, vessel by vessel on all threads.
     """
-    ip, inn, has_p, has_n = neighbours(vessel, accepted)
-    d0 = config.n_sigma * math.sqrt(2.0) * config.sigma_pos_m
-    tau = config.time_resolution_s
-    dtp = t - t[ip] + tau
-    dtn = t[inn] - t + tau
-    dtp = np.where(has_p, dtp, 1.0)
-    dtn = np.where(has_n, dtn, 1.0)
-    v_prev = np.where(has_p, (np.hypot(*(xy - xy[ip]).T) - d0) / dtp, np.nan)
-    v_next = np.where(has_n, (np.hypot(*(xy[inn] - xy).T) - d0) / dtn, np.nan)
-    span = t[inn] - t[ip]
-    w = np.where(span > 0, (t - t[ip]) / np.where(span > 0, span, 1.0), 0.5)
-    chord = xy[ip] + w[:, None] * (xy[inn] - xy[ip])
-    e = np.hypot(*(xy - chord).T)
-    a_chord = np.where(has_p & has_n, 2.0 * (e - d0) / (dtp * dtn), np.nan)
+    n = t.size
+    v_prev, v_next, a_chord = np.empty(n), np.empty(n), np.empty(n)
+    if n:
+        starts, chunks = vessel_layout(vessel)
+        c = np.ascontiguousarray
+        _plausibility_kernel(
+            starts,
+            chunks,
+            c(t, dtype=np.float64),
+            c(xy, dtype=np.float64),
+            c(accepted, dtype=np.bool_),
+            *_allowances(config)[:2],
+            v_prev,
+            v_next,
+            a_chord,
+        )
     return v_prev, v_next, a_chord
 
 
+def _allowances(cfg: AisTrackerConfig) -> tuple[float, float, float, float]:
+    """Noise allowance ``d0`` (m), timestamp resolution (s), largest speed (m/s) and
+    acceleration (m/s^2) of the plausibility tests."""
+    d0 = cfg.n_sigma * math.sqrt(2.0) * cfg.sigma_pos_m
+    return d0, cfg.time_resolution_s, cfg.max_speed_kn * KNOT_MPS, cfg.max_accel_mps2
+
+
+@njit(cache=True, nogil=True)
+def _vessel_plausibility(
+    a, b, t, z, accepted, d0, tau, v_prev, v_next, a_chord, nxt
+):  # pragma: no cover - compiled
+    """:func:`neighbour_plausibility` of the rows ``a..b-1`` of one vessel; ``nxt``
+    (scratch of ``b - a``) receives the next accepted row after each row (-1: none)."""
+    n_idx = -1
+    for i in range(b - 1, a - 1, -1):
+        nxt[i - a] = n_idx
+        if accepted[i]:
+            n_idx = i
+    p = -1  # the previous accepted row
+    for i in range(a, b):
+        nn = nxt[i - a]
+        dtp = t[i] - t[p] + tau if p >= 0 else 1.0
+        dtn = t[nn] - t[i] + tau if nn >= 0 else 1.0
+        v_prev[i] = np.nan
+        v_next[i] = np.nan
+        a_chord[i] = np.nan
+        if p >= 0:
+            v_prev[i] = (math.hypot(z[i, 0] - z[p, 0], z[i, 1] - z[p, 1]) - d0) / dtp
+        if nn >= 0:
+            v_next[i] = (math.hypot(z[nn, 0] - z[i, 0], z[nn, 1] - z[i, 1]) - d0) / dtn
+        if p >= 0 and nn >= 0:
+            span = t[nn] - t[p]
+            w = (t[i] - t[p]) / span if span > 0 else 0.5
+            cx = z[p, 0] + w * (z[nn, 0] - z[p, 0])
+            cy = z[p, 1] + w * (z[nn, 1] - z[p, 1])
+            e = math.hypot(z[i, 0] - cx, z[i, 1] - cy)
+            a_chord[i] = 2.0 * (e - d0) / (dtp * dtn)
+        if accepted[i]:
+            p = i
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _plausibility_kernel(
+    starts, chunks, t, z, accepted, d0, tau, v_prev, v_next, a_chord
+):  # pragma: no cover - compiled
+    for c in prange(chunks.size - 1):
+        size = 1
+        for v in range(chunks[c], chunks[c + 1]):
+            size = max(size, starts[v + 1] - starts[v])
+        nxt = np.empty(size, dtype=np.int64)
+        for v in range(chunks[c], chunks[c + 1]):
+            a, b = starts[v], starts[v + 1]
+            _vessel_plausibility(a, b, t, z, accepted, d0, tau, v_prev, v_next, a_chord, nxt)
+
+
+@njit(cache=True, inline="always")
+def _fmax(x, y):  # pragma: no cover - compiled
+    """``np.fmax`` of scalars (a NaN loses)."""
+    if x != x:
+        return y
+    if y != y:
+        return x
+    return x if x >= y else y
+
+
+@njit(cache=True, nogil=True)
+def _revisit_vessel(
+    a, b, t, z, use, flag, segment, force, par, acc, rej, score, vp, vn, ac, nxt
+):  # pragma: no cover - compiled
+    """One revisit pass over the vessel on rows ``a..b-1`` (see :func:`revisit`): sets
+    ``force`` of the revised reports; returns whether any was revised. The other arguments
+    are scratch arrays of at least ``b - a`` values."""
+    d0, tau, vmax, amax = par
+    m = b - a
+    for k in range(m):
+        acc[k] = use[a + k] and flag[a + k] == OutlierKind.NONE
+    _vessel_plausibility(0, m, t[a:b], z[a:b], acc, d0, tau, vp, vn, ac, nxt)
+    for k in range(m):
+        i = a + k
+        bad = vp[k] > vmax or vn[k] > vmax or ac[k] > amax
+        rej[k] = acc[k] and bad and segment[i] >= 0 and force[i] == Force.FREE
+        score[k] = _fmax(_fmax(vp[k] / vmax, vn[k] / vmax), ac[k] / amax)
+    new = False
+    p = -1
+    for k in range(m):
+        i = a + k
+        nn = nxt[k]
+        gross = (
+            flag[i] == OutlierKind.IMPLAUSIBLE_JUMP or flag[i] == OutlierKind.IMPLAUSIBLE_AFTER_GAP
+        )
+        bad = vp[k] > vmax or vn[k] > vmax or ac[k] > amax
+        # of adjacent accepted reports that are implausible together (a glitch and the
+        # report after it), only the worst one is rejected in this pass: the other is
+        # judged again against its new neighbours in the next pass
+        beaten = (p >= 0 and rej[p] and score[p] >= score[k]) or (
+            nn >= 0 and rej[nn] and score[nn] > score[k]
+        )
+        if gross and not bad and force[i] == Force.FREE:
+            force[i] = Force.ACCEPT
+            new = True
+        elif rej[k] and not beaten:
+            force[i] = Force.REJECT
+            new = True
+        if acc[k]:
+            p = k
+    return new
+
+
+@njit(cache=True, nogil=True, parallel=True)
+def _revisit_kernel(
+    starts, chunks, t, z, use, flag, segment, force, par, changed
+):  # pragma: no cover - compiled
+    for c in prange(chunks.size - 1):
+        size = 1
+        for v in range(chunks[c], chunks[c + 1]):
+            size = max(size, starts[v + 1] - starts[v])
+        acc, rej = np.empty(size, np.bool_), np.empty(size, np.bool_)
+        score, vp, vn, ac = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
+        nxt = np.empty(size, dtype=np.int64)
+        for v in range(chunks[c], chunks[c + 1]):
+            changed[v] = _revisit_vessel(
+                starts[v],
+                starts[v + 1],
+                t,
+                z,
+                use,
+                flag,
+                segment,
+                force,
+                par,
+                acc,
+                rej,
+                score,
+                vp,
+                vn,
+                ac,
+                nxt,
+            )
+
+
 def _revisit_once(rows: Rows, out: KernelOutputs, cfg: AisTrackerConfig) -> NDArray[np.bool_]:
-    """One revisit pass: sets ``rows.force`` of the revised reports; returns them."""
-    vs, force = rows.vessel, rows.force
-    vmax = cfg.max_speed_kn * KNOT_MPS
-    flag = out.kind
-    accepted = rows.use & (flag == OutlierKind.NONE)
-    v_prev, v_next, a_chord = neighbour_plausibility(vs, rows.t, rows.z, accepted, cfg)
-    bad = (v_prev > vmax) | (v_next > vmax) | (a_chord > cfg.max_accel_mps2)
-    free = force == Force.FREE  # a decision is revised at most once, so the loop ends
-    gross = (flag == OutlierKind.IMPLAUSIBLE_JUMP) | (flag == OutlierKind.IMPLAUSIBLE_AFTER_GAP)
-    acc = gross & ~bad & free
-    rej = accepted & bad & (out.segment >= 0) & free
-    # of adjacent accepted reports that are implausible together (a glitch and the report
-    # after it), reject only the worst one in this pass: the other is judged again against
-    # its new neighbours in the next pass
-    score = np.fmax(np.fmax(v_prev / vmax, v_next / vmax), a_chord / cfg.max_accel_mps2)
-    ip, inn, has_p, has_n = neighbours(vs, accepted)
-    beaten_prev = has_p & rej[ip] & (score[ip] >= score)
-    beaten_next = has_n & rej[inn] & (score[inn] > score)
-    rej &= ~(beaten_prev | beaten_next)
-    force[acc] = Force.ACCEPT
-    force[rej] = Force.REJECT
-    return acc | rej
+    """One revisit pass: sets ``rows.force`` of the revised reports (an outlier plausible
+    on both sides is accepted, an accepted report implausible on a side rejected; a
+    decision is revised at most once, so the passes end); returns the rows of the vessels
+    with a revised report."""
+    starts, chunks = vessel_layout(rows.vessel)
+    changed = np.zeros(starts.size - 1, dtype=np.bool_)
+    if rows.t.size:
+        _revisit_kernel(
+            starts,
+            chunks,
+            rows.t,
+            np.ascontiguousarray(rows.z),
+            rows.use,
+            out.kind,
+            out.segment,
+            rows.force,
+            _allowances(cfg),
+            changed,
+        )
+    return np.repeat(changed, np.diff(starts))
 
 
 def revisit(rows: Rows, out: KernelOutputs, cfg: AisTrackerConfig) -> None:
@@ -177,8 +300,7 @@ def revisit(rows: Rows, out: KernelOutputs, cfg: AisTrackerConfig) -> None:
     reports that are implausible are rejected; the vessels concerned are filtered again.
     Updates ``rows.force`` and ``out`` in place."""
     for _ in range(cfg.revisit_passes):
-        new = _revisit_once(rows, out, cfg)
-        if not new.any():
+        redo = _revisit_once(rows, out, cfg)
+        if not redo.any():
             break
-        redo = np.isin(rows.vessel, np.unique(rows.vessel[new]))
         merge_outputs(out, redo, run_rows(rows.take(redo), cfg))

@@ -19,15 +19,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.filters.ais.config import AisTrackerConfig
-from seatrack.filters.ais.kernel import Force, KernelOutputs, OutlierKind
+from seatrack.filters.ais.kernel import Force, KernelOutputs, OutlierKind, vessel_starts
 from seatrack.filters.ais.noise import position_noise
 from seatrack.filters.ais.offsets import (
     OffsetScores,
     apply_offsets,
     estimate_prior,
-    offset_scores,
-    pos_cov,
     prior_counts,
+    std_offset_scores,
 )
 from seatrack.filters.ais.plausibility import Rows, merge_outputs, run_rows
 
@@ -64,41 +63,70 @@ class Refinement:
        prediction log-likelihood is kept (steady ships vs manoeuvring craft).
     """
 
+    #: the attributes holding per-row arrays (what a runner may hold elsewhere, see
+    #: :meth:`__getattr__`), and of those the ones the steps replace or change (all
+    #: four whenever :attr:`version` grows)
+    PARTS = ("rows", "out", "alt", "sig_f", "off", "current")
+    STATE = ("alt", "sig_f", "off", "current")
+    #: set by a runner holding the parts elsewhere (see :meth:`__getattr__`)
+    load_part: Callable[[str], Any]
+
     def __init__(self, rows: Rows, out: KernelOutputs, cfg: AisTrackerConfig) -> None:
         self.rows, self.out, self.cfg = rows, out, cfg
         self.usable = rows.use & (out.kind == OutlierKind.NONE) & (out.segment >= 0)
-        self.uv, self.inv_v = np.unique(rows.vessel, return_inverse=True)
-        self.off = np.zeros(rows.t.size)
-        self.sig_f = rows.sig
+        self.starts = vessel_starts(rows.vessel)
         self.force_f = rows.force.copy()
         self.force_f[self.usable] = Force.ACCEPT  # the decisions of the passes before
         self.force_f[rows.use & (out.kind == OutlierKind.IMPLAUSIBLE_JUMP)] = Force.REJECT
         self.steady = replace(cfg, q_accel=cfg.q_accel_steady or cfg.q_accel)
-        self.alt = out
+        #: grows with every step that changes the state (offsets, noise, tracks, scores)
+        self.version = 0
+        # set by seed (the first track and noise before)
+        self.alt: KernelOutputs | None = None
+        self.sig_f: FloatArray | None = None
+        self.off: FloatArray | None = None
         # first estimate from the (manoeuvring, coarse-noise) track: the smoothed residual
-        self._scores = offset_scores(
+        self.current = std_offset_scores(
             rows.z,
             out.state,
-            pos_cov(out.std),
+            out.std,
             rows.sig,
-            self.off,
+            np.zeros(rows.t.size),
             self.usable,
             cfg,
             leave_one_out=False,
         )
 
+    def __getattr__(self, name: str) -> Any:
+        """A part of :attr:`PARTS` held elsewhere: a runner that keeps the parts of many
+        groups in files deletes the attributes and sets ``load_part(name)``, which this
+        calls on first use."""
+        load = self.__dict__.get("load_part")
+        if load is None or name not in self.PARTS:
+            raise AttributeError(name)
+        value = load(name)
+        setattr(self, name, value)
+        return value
+
     def scores(self) -> OffsetScores:
         """The offset scores whose prior the next step needs."""
-        return self._scores
+        return self.current
+
+    def _vessel_index(self) -> NDArray[np.int64]:
+        """Index of each row's vessel (rows sorted by vessel)."""
+        return np.repeat(np.arange(self.starts.size - 1), np.diff(self.starts))
 
     def _per_vessel(self, mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
         """Rows of the vessels with any row in ``mask``."""
-        return (np.bincount(self.inv_v, mask, self.uv.size) > 0)[self.inv_v]
+        if mask.size == 0:
+            return mask
+        return np.repeat(np.logical_or.reduceat(mask, self.starts[:-1]), np.diff(self.starts))
 
     def _noise(self) -> FloatArray:
         """Report noise again, from the accepted reports only and, for vessels with
         offsets, on the corrected times."""
         cfg, rows, off = self.cfg, self.rows, self.off
+        assert off is not None
         moved = self._per_vessel(off != 0.0)
         if cfg.estimate_noise:
             fine = replace(cfg, sigma_time_min_s=cfg.sigma_time_fine_s)
@@ -109,43 +137,52 @@ class Refinement:
             sig_f[moved, 1] = cfg.sigma_time_fine_s
         return sig_f
 
-    def _run(self, sub: NDArray[np.bool_], c: AisTrackerConfig) -> KernelOutputs:
+    def _run(self, sub: NDArray[np.bool_] | None, c: AisTrackerConfig) -> KernelOutputs:
+        """The kernel over the vessels of the rows ``sub`` (None: all) with the refined
+        noise, decisions and offsets."""
+        assert self.sig_f is not None and self.off is not None
         rows = self.rows.take(sub, sig=self.sig_f, force=self.force_f, toff=self.off)
         return run_rows(rows, c)
 
     def _loo_scores(self) -> OffsetScores:
         """Leave-one-out offset scores from the steady track."""
         alt = self.alt
-        return offset_scores(
-            self.rows.z, alt.state, pos_cov(alt.std), self.sig_f, self.off, self.usable, self.cfg
+        assert alt is not None and self.sig_f is not None and self.off is not None
+        return std_offset_scores(
+            self.rows.z, alt.state, alt.std, self.sig_f, self.off, self.usable, self.cfg
         )
 
     def seed(self, prior: FloatArray | None) -> None:
         """Steps 1-3: seed offsets under ``prior``, noise, the steady track and its
         leave-one-out scores."""
-        self.off = apply_offsets(self._scores, prior, self.cfg)
+        self.off = apply_offsets(self.current, prior, self.cfg)
         self.sig_f = self._noise()
-        self.alt = self._run(np.ones(self.rows.t.size, dtype=bool), self.steady)
-        self._scores = self._loo_scores()
+        self.alt = self._run(None, self.steady)
+        self.current = self._loo_scores()
+        self.version += 1
 
     def update(self, prior: FloatArray | None, more: bool) -> bool:
         """Offsets again under ``prior``; the vessels whose offsets changed are filtered
         again (noise re-estimated); ``more``: another offset pass follows (its scores are
         computed). Returns True if any offset changed."""
-        new = apply_offsets(self._scores, prior, self.cfg)
+        new = apply_offsets(self.current, prior, self.cfg)
         again = self._per_vessel(new != self.off)
         if not again.any():
             return False
         self.off = new
         self.sig_f = self._noise()
+        assert self.alt is not None
         merge_outputs(self.alt, again, self._run(again, self.steady))
         if more:
-            self._scores = self._loo_scores()
+            self.current = self._loo_scores()
+        self.version += 1
         return True
 
     def finish(self) -> tuple[KernelOutputs, FloatArray]:
         """Step 4; returns the kernel outputs and the offsets (s) of every row."""
-        cfg, alt, inv_v, nv = self.cfg, self.alt, self.inv_v, self.uv.size
+        cfg, alt, off = self.cfg, self.alt, self.off
+        assert alt is not None and off is not None, "finish() before seed()"
+        inv_v, nv = self._vessel_index(), self.starts.size - 1
         # vessels the steady model fits badly (mean NIS above steady_nis_ratio x its 2 dof)
         # are filtered with q_accel too; per vessel the track whose reports have the larger
         # prediction log-likelihood is kept
@@ -157,7 +194,7 @@ class Refinement:
             # the q_accel track: the passes before for vessels without offsets (same model
             # but for the noise estimate), else filtered again with the offsets
             hi = KernelOutputs._make(a.copy() for a in self.out)
-            moved = self._per_vessel(self.off != 0.0)
+            moved = self._per_vessel(off != 0.0)
             if (cand & moved).any():
                 merge_outputs(hi, cand & moved, self._run(cand & moved, cfg))
             fin = cand & np.isfinite(hi.loglik) & np.isfinite(alt.loglik)
@@ -165,7 +202,7 @@ class Refinement:
             ll_alt = np.bincount(inv_v[fin], alt.loglik[fin], nv)
             take = cand & (ll > ll_alt)[inv_v]
             merge_outputs(alt, take, KernelOutputs._make(a[take] for a in hi))
-        return alt, self.off
+        return alt, off
 
 
 class GroupRunner(Protocol):

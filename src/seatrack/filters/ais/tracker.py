@@ -80,9 +80,11 @@ class VesselInputs:
     cog: FloatArray | None = None
 
 
-def prepare_rows(inputs: VesselInputs, cfg: AisTrackerConfig) -> tuple[Rows, NDArray[np.int64]]:
+def prepare_rows(
+    inputs: VesselInputs, cfg: AisTrackerConfig
+) -> tuple[Rows, NDArray[np.int64] | None]:
     """Rows sorted by (vessel, time) (stable: equal times keep their input order) with the
-    estimated report noise, and the sort order."""
+    estimated report noise, and the sort order (None when the inputs were sorted)."""
     vid = np.asarray(inputs.vessel, dtype=np.int64)
     tt = np.asarray(inputs.t, dtype=np.float64)
     z = np.asarray(inputs.xy, dtype=np.float64)
@@ -91,14 +93,20 @@ def prepare_rows(inputs: VesselInputs, cfg: AisTrackerConfig) -> tuple[Rows, NDA
         raise ValueError(f"vessel (N,), t (N,) and xy (N, 2) needed; got {vid.shape}, {z.shape}")
     if not (np.isfinite(tt).all() and np.isfinite(z).all()):
         raise ValueError("times and positions must be finite (reject bad rows first)")
+    order: NDArray[np.int64] | None = None
+    if not _sorted(vid, tt):
+        order = np.lexsort((tt, vid))
 
     def opt(a: ArrayLike | None, shape: tuple[int, ...], fill: float) -> NDArray:
-        return np.full(shape, fill) if a is None else np.asarray(a, dtype=np.float64)
+        x = np.full(shape, fill) if a is None else np.asarray(a, dtype=np.float64)
+        return x if order is None else x[order]
+
+    def take(a: NDArray) -> NDArray:
+        return a if order is None else a[order]
 
     u = np.ones(n, dtype=bool) if inputs.use is None else np.asarray(inputs.use, dtype=bool)
-    order = np.lexsort((tt, vid))
-    vs, ts, zs, us = vid[order], tt[order], z[order], u[order]
-    vo = np.ascontiguousarray(opt(inputs.v0, (n, 2), np.nan)[order])
+    vs, ts, zs, us = take(vid), take(tt), np.ascontiguousarray(take(z)), take(u)
+    vo = np.array(opt(inputs.v0, (n, 2), np.nan), order="C")  # a copy: zeroed below
     known: NDArray[np.bool_] = np.asarray(np.isfinite(vo).all(axis=1))
     vo[~known] = 0.0
     if cfg.estimate_noise:
@@ -113,13 +121,21 @@ def prepare_rows(inputs: VesselInputs, cfg: AisTrackerConfig) -> tuple[Rows, NDA
         us,
         vo,
         known,
-        opt(inputs.sog, (n,), np.nan)[order],
-        opt(inputs.cog, (n,), np.nan)[order],
+        opt(inputs.sog, (n,), np.nan),
+        opt(inputs.cog, (n,), np.nan),
         sig,
         np.full(n, Force.FREE, dtype=np.int8),
         np.zeros(n),
     )
     return rows, order
+
+
+def _sorted(vessel: NDArray[np.int64], t: FloatArray) -> bool:
+    """Rows already in (vessel, time) order."""
+    if vessel.size < 2:
+        return True
+    v1, v0 = vessel[1:], vessel[:-1]
+    return bool(np.all((v1 > v0) | ((v1 == v0) & (t[1:] >= t[:-1]))))
 
 
 def first_track(rows: Rows, cfg: AisTrackerConfig) -> KernelOutputs:
@@ -130,11 +146,10 @@ def first_track(rows: Rows, cfg: AisTrackerConfig) -> KernelOutputs:
 
 
 def track_states(
-    rows: Rows, out: KernelOutputs, toff: FloatArray, order: NDArray[np.int64]
+    rows: Rows, out: KernelOutputs, toff: FloatArray, order: NDArray[np.int64] | None
 ) -> TrackStates:
-    """:class:`TrackStates` in input order from the outputs over the sorted rows; segments
-    numbered 1, 2, ... within each vessel in time order."""
-    n = order.size
+    """:class:`TrackStates` in input order from the outputs over the sorted rows (``order``
+    of :func:`prepare_rows`); segments numbered 1, 2, ... within each vessel in time order."""
     seg = out.segment.copy()
     has = np.flatnonzero(seg >= 0)
     if has.size:
@@ -147,8 +162,11 @@ def track_states(
         rank = np.empty(ids.size, dtype=np.int64)
         rank[by_first] = num
         seg[has] = rank[which.ravel()]
+    toff = np.asarray(toff, dtype=np.float64)
+    if order is None:
+        return TrackStates(out.state, out.std[:, :NX], out.kind > 0, out.kind, seg, out.nis, toff)
     inv = np.empty_like(order)
-    inv[order] = np.arange(n)
+    inv[order] = np.arange(order.size)
     return TrackStates(
         out.state[inv],
         out.std[inv, :NX],
@@ -156,7 +174,7 @@ def track_states(
         out.kind[inv],
         seg[inv],
         out.nis[inv],
-        np.asarray(toff, dtype=np.float64)[inv],
+        toff[inv],
     )
 
 

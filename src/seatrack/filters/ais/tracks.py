@@ -10,22 +10,17 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from seatrack.filters.ais.config import AisTrackerConfig
+from seatrack.filters.ais.frames import north_convergence_rows, plane_to_wgs84, vessel_planes
+from seatrack.filters.ais.kernel import vessel_starts
 from seatrack.filters.ais.tracker import TrackStates, VesselInputs, track_vessel_groups
-from seatrack.geometry import (
-    KNOT_MPS,
-    LocalFrame,
-    bearing,
-    local_frames,
-    local_to_geodetic,
-    north_convergence,
-    wrap_2pi,
-)
+from seatrack.geometry import KNOT_MPS, bearing, wrap_2pi
 
 FloatArray = NDArray[np.float64]
 
 __all__ = [
     "AisTracks",
     "PreparedReports",
+    "ReportPlanes",
     "prepare_reports",
     "track_reports",
     "tracks_from_states",
@@ -83,7 +78,8 @@ def track_reports(
 ) -> AisTracks:
     """Track every vessel of :class:`~seatrack.io.ais.AisReports` (rejected rows skipped).
 
-    Positions go to one local plane per vessel (:func:`seatrack.geometry.local_frames`);
+    Positions go to one local plane per vessel (the planes of
+    :func:`seatrack.geometry.local_frames`, :mod:`~seatrack.filters.ais.frames`);
     the compiled tracker runs over all vessels at once (:func:`track_vessels`); positions
     come back to WGS84 (:func:`seatrack.geometry.local_to_geodetic`) and the course is
     referred to true North at the vessel (the plane's North differs by the meridian convergence).
@@ -100,72 +96,83 @@ def track_reports(
     """
     prep = prepare_reports(reports, use)
     st = track_vessel_groups([prep.inputs], config or AisTrackerConfig())[0]
-    return tracks_from_states(prep, st)
+    return tracks_from_states(prep.planes, st)
+
+
+@dataclass(frozen=True)
+class ReportPlanes:
+    """Where the tracker's rows sit in a report table of ``n`` rows: ``idx`` the table row
+    of each (the usable rows, sorted by (vessel, time)) and the origin ``lat0``, ``lon0``
+    (deg) of its vessel's plane (the vessel's first usable row in table order)."""
+
+    n: int
+    idx: NDArray[np.int64]
+    lat0: FloatArray
+    lon0: FloatArray
 
 
 @dataclass(frozen=True)
 class PreparedReports:
-    """Tracker inputs of a report table: the usable rows ``idx``, their local frames and
-    :class:`~seatrack.filters.ais.tracker.VesselInputs` (SOG/COG in the planes)."""
+    """Tracker inputs of a report table: :class:`ReportPlanes` and the
+    :class:`~seatrack.filters.ais.tracker.VesselInputs` of its usable rows in the planes
+    (SOG/COG too), in the order of ``planes.idx``."""
 
-    n: int
-    idx: NDArray[np.int64]
-    frame: LocalFrame
+    planes: ReportPlanes
     inputs: VesselInputs
 
 
 def prepare_reports(reports: Any, use: ArrayLike | None = None) -> PreparedReports:
-    """Local planes per vessel and the tracker inputs of the usable rows of ``reports``."""
-    ok = reports.valid
-    frame = local_frames(reports.mmsi, reports.lat, reports.lon, ok)
-    idx = np.flatnonzero(ok)
+    """Local planes per vessel and the tracker inputs of the usable rows of ``reports``
+    (the planes of :func:`seatrack.geometry.local_frames`, computed by
+    :func:`~seatrack.filters.ais.frames.vessel_planes`)."""
+    ok = np.flatnonzero(reports.valid)
+    idx = ok[np.lexsort((reports.t[ok], reports.mmsi[ok]))]
+    mmsi = reports.mmsi[idx]
+    en, lat0, lon0, gam0 = vessel_planes(reports.lat, reports.lon, idx, vessel_starts(mmsi))
     sog = reports.sog_kn[idx] * KNOT_MPS
     cog = np.radians(reports.cog_deg[idx])
     u = None if use is None else np.asarray(use, dtype=bool)[idx]
     # COG is referred to true North at the vessel; the plane's North differs by the
     # meridian convergence, so rotate it into the plane (also for the initial velocity)
-    gam0 = north_convergence(reports.lat[idx], reports.lon[idx], frame.lat0[idx], frame.lon0[idx])
     cog_plane = cog + gam0
-    v0 = np.stack([sog * np.sin(cog_plane), sog * np.cos(cog_plane)], axis=-1)
-    inputs = VesselInputs(
-        reports.mmsi[idx], reports.t[idx], frame.enu[idx, :2], u, v0, sog, cog_plane
-    )
-    return PreparedReports(len(reports), idx, frame, inputs)
+    v0 = np.empty((idx.size, 2))
+    v0[:, 0] = sog * np.sin(cog_plane)
+    v0[:, 1] = sog * np.cos(cog_plane)
+    inputs = VesselInputs(mmsi, reports.t[idx], en, u, v0, sog, cog_plane)
+    return PreparedReports(ReportPlanes(len(reports), idx, lat0, lon0), inputs)
 
 
-def tracks_from_states(prep: PreparedReports, st: TrackStates) -> AisTracks:
-    """:class:`AisTracks` of all rows from the states of the usable ones: WGS84 positions
-    and courses referred to true North at the vessel."""
-    n, idx, frame = prep.n, prep.idx, prep.frame
+def tracks_from_states(prep: ReportPlanes, st: TrackStates) -> AisTracks:
+    """:class:`AisTracks` of all rows from the states of the usable ones (in the order of
+    ``prep.idx``): WGS84 positions and courses referred to true North at the vessel."""
+    n, idx = prep.n, prep.idx
 
     def full(a: NDArray, fill: Any = np.nan, dtype: Any = float) -> NDArray:
         out = np.full((n,) + a.shape[1:], fill, dtype=dtype)
         out[idx] = a
         return out
 
-    state = full(st.state)
-    std = full(st.std)
-    lat, lon = local_to_geodetic(state[:, 0], state[:, 1], frame.lat0, frame.lon0)
-    gam = north_convergence(lat, lon, frame.lat0, frame.lon0)
-    course_plane = bearing(state[:, 2], state[:, 3])
-    course = np.where(np.isfinite(state[:, 2]), wrap_2pi(course_plane - gam), np.nan)
-    speed = np.hypot(state[:, 2], state[:, 3])
+    x, y, vx, vy = (st.state[:, j] for j in range(4))
+    lat, lon = plane_to_wgs84(x, y, prep.lat0, prep.lon0)
+    gam = north_convergence_rows(lat, lon, prep.lat0, prep.lon0)
+    course = np.where(np.isfinite(vx), wrap_2pi(bearing(vx, vy) - gam), np.nan)
+    std = st.std
     return AisTracks(
-        x_m=state[:, 0],
-        y_m=state[:, 1],
-        lat=lat,
-        lon=lon,
-        lat0=frame.lat0,
-        lon0=frame.lon0,
-        course=course,
-        speed=speed,
-        turn_rate=state[:, 4],
-        std_x_m=std[:, 0],
-        std_y_m=std[:, 1],
-        std_pos_m=np.sqrt(0.5 * (std[:, 0] ** 2 + std[:, 1] ** 2)),
-        std_course=std[:, 3],
-        std_speed=std[:, 2],
-        std_turn_rate=std[:, 4],
+        x_m=full(x),
+        y_m=full(y),
+        lat=full(lat),
+        lon=full(lon),
+        lat0=full(prep.lat0),
+        lon0=full(prep.lon0),
+        course=full(course),
+        speed=full(np.hypot(vx, vy)),
+        turn_rate=full(st.state[:, 4]),
+        std_x_m=full(std[:, 0]),
+        std_y_m=full(std[:, 1]),
+        std_pos_m=full(np.sqrt(0.5 * (std[:, 0] ** 2 + std[:, 1] ** 2))),
+        std_course=full(std[:, 3]),
+        std_speed=full(std[:, 2]),
+        std_turn_rate=full(std[:, 4]),
         outlier=full(st.outlier, False, bool),
         outlier_kind=full(st.outlier_kind, 0, np.int8),
         segment=full(st.segment, -1, np.int64),

@@ -125,7 +125,7 @@ def _no_mmsi(pieces: Sequence[AisReports], sources: tuple[str, ...]) -> tuple[An
 
     r = _partition(pieces, sources)
     prep = prepare_reports(r)
-    tr = tracks_from_states(prep, track_vessel_groups([prep.inputs])[0])
+    tr = tracks_from_states(prep.planes, track_vessel_groups([prep.inputs])[0])
     summary = RunSummary()
     summary.add(r, tr)
     table = tracks_table(r, track_columns(tr))

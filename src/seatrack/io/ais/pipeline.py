@@ -21,7 +21,6 @@ sizes groups from a memory limit.
 
 from __future__ import annotations
 
-import pickle
 import resource
 import tempfile
 from collections.abc import Callable, Sequence
@@ -33,7 +32,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.filters.ais import AisTrackerConfig
-from seatrack.filters.ais.offsets import OffsetScores, prior_counts
 from seatrack.filters.ais.refine import InMemory, Refinement, drive
 from seatrack.filters.ais.tracker import (
     first_track,
@@ -43,11 +41,12 @@ from seatrack.filters.ais.tracker import (
 )
 from seatrack.filters.ais.tracks import (
     AisTracks,
-    PreparedReports,
+    ReportPlanes,
     prepare_reports,
     tracks_from_states,
 )
 from seatrack.io.ais.output import TracksWriter, track_columns
+from seatrack.io.ais.park import Parked, ParkedGroups, dump, undump
 from seatrack.io.ais.read import file_blocks
 from seatrack.io.ais.reports import (
     REASON_LABELS,
@@ -160,8 +159,7 @@ class _Store:
             self.bytes += size
             return
         path = self.folder / f"block{len(self.items)}.pkl"
-        with path.open("wb") as fh:
-            pickle.dump(r, fh, protocol=5)
+        dump(r, path)
         self.items.append(path)
 
     def blocks(self) -> Any:
@@ -170,7 +168,7 @@ class _Store:
         while self.items:
             it = self.items.pop()
             if isinstance(it, Path):
-                yield _undump(it)
+                yield undump(it)
                 it.unlink()
             else:
                 yield it
@@ -247,8 +245,7 @@ def _split(
                 piece = b.take(order[bounds[j] : bounds[j + 1]])
                 if spill:
                     path = folder / f"g{j}_b{k}.pkl"
-                    with path.open("wb") as fh:
-                        pickle.dump(piece, fh, protocol=5)
+                    dump(piece, path)
                     pieces[j].append(path)
                 else:
                     pieces[j].append(piece)
@@ -262,7 +259,7 @@ def _load(items: list[AisReports | Path], sources: tuple[str, ...]) -> AisReport
     while items:
         it = items.pop()
         if isinstance(it, Path):
-            parts.append(_undump(it))
+            parts.append(undump(it))
             it.unlink()
         else:
             parts.append(it)
@@ -276,12 +273,13 @@ def _load(items: list[AisReports | Path], sources: tuple[str, ...]) -> AisReport
 
 @dataclass
 class GroupState:
-    """One vessel group between the tracking steps: its reports and tracker inputs, and
-    either its refinement (``ref``) or, without one, its first track (``rows``, ``out``)."""
+    """One vessel group between the tracking steps: its reports, where the tracker's rows
+    sit in them (``planes``, ``order``), and either its refinement (``ref``) or, without
+    one, its first track (``rows``, ``out``)."""
 
     reports: AisReports
-    prep: PreparedReports
-    order: NDArray[np.int64]
+    planes: ReportPlanes
+    order: NDArray[np.int64] | None
     ref: Refinement | None = None
     rows: Any = None
     out: Any = None
@@ -294,8 +292,8 @@ def start_group(r: AisReports, cfg: AisTrackerConfig) -> GroupState:
     rows, order = prepare_rows(prep.inputs, cfg)
     out = first_track(rows, cfg)
     if cfg.refine and rows.t.size:
-        return GroupState(r, prep, order, Refinement(rows, out, cfg))
-    return GroupState(r, prep, order, None, rows, out)
+        return GroupState(r, prep.planes, order, Refinement(rows, out, cfg))
+    return GroupState(r, prep.planes, order, None, rows, out)
 
 
 def finish_group(grp: GroupState) -> AisTracks:
@@ -306,57 +304,14 @@ def finish_group(grp: GroupState) -> AisTracks:
     else:
         rows, out = grp.rows, grp.out
         toff = np.zeros(rows.t.size)
-    return tracks_from_states(grp.prep, track_states(rows, out, toff, grp.order))
-
-
-def _ident_scores(ref: Refinement) -> OffsetScores:
-    sc = ref.scores()
-    keep = np.flatnonzero(sc.ident)
-    return OffsetScores(keep, sc.q[keep], np.ones(keep.size, bool), 0)
-
-
-def _dump(obj: Any, path: Path) -> None:
-    with path.open("wb") as fh:
-        pickle.dump(obj, fh, protocol=5)
-
-
-def _undump(path: Path) -> Any:
-    with path.open("rb") as fh:
-        return pickle.load(fh)
-
-
-class _Spilled:
-    """:class:`~seatrack.filters.ais.refine.GroupRunner` of refinements pickled in a
-    folder; the identifiable scores of each group stay in memory for the prior counts."""
-
-    def __init__(self, paths: list[Path], scores: list[OffsetScores]) -> None:
-        self.paths, self.q = paths, scores
-
-    def each(self, f: Callable[[Refinement], Any]) -> list[Any]:
-        out = []
-        for k, p in enumerate(self.paths):
-            ref: Refinement = _undump(p)
-            out.append(f(ref))
-            self.q[k] = _ident_scores(ref)
-            _dump(ref, p)
-            del ref
-        return out
-
-    def counts(self, prior: NDArray[np.float64]) -> NDArray[np.int64]:
-        total = np.zeros(prior.size, dtype=np.int64)
-        for sc in self.q:
-            total += prior_counts(sc, prior)
-        return total
-
-    def n_ident(self) -> int:
-        return sum(sc.rows.size for sc in self.q)
+    return tracks_from_states(grp.planes, track_states(rows, out, toff, grp.order))
 
 
 def _track_groups(
     groups: list[list[AisReports | Path]],
     sources: tuple[str, ...],
     cfg: AisTrackerConfig,
-    folder: Path,
+    parked: Parked,
     emit: Callable[[AisReports, AisTracks], None],
 ) -> None:
     """Track the vessel groups (see the module docstring) and pass each to ``emit``."""
@@ -368,26 +323,20 @@ def _track_groups(
         del grp  # the tracker's state is freed before the output is formatted
         emit(reports, tracks)
         return
-    ctx, refs, scores = [], [], []
+    runner = ParkedGroups(parked)
     for j, items in enumerate(groups):
         grp = start_group(_load(items, sources), cfg)
         if grp.ref is not None:
-            path = folder / f"ref{j}.pkl"
-            _dump(grp.ref, path)
-            refs.append(path)
-            scores.append(_ident_scores(grp.ref))
+            runner.add(j, grp.ref)
             grp.ref = None
-        ctx.append(folder / f"group{j}.pkl")
-        _dump((grp, refs[-1] if refs and refs[-1].name == f"ref{j}.pkl" else None), ctx[-1])
+        parked.put(f"g{j}", grp)
         del grp
-    if refs:
-        drive(_Spilled(refs, scores), cfg)
-    for path in ctx:
-        grp, ref_path = _undump(path)
-        path.unlink()
-        if ref_path is not None:
-            grp.ref = _undump(ref_path)
-            ref_path.unlink()
+    if runner.refs:
+        drive(runner, cfg)
+    for j in range(len(groups)):
+        grp = parked.pop(f"g{j}")
+        if j in runner.refs:
+            grp.ref = runner.pop(j)
         reports, tracks = grp.reports, finish_group(grp)
         del grp
         emit(reports, tracks)
@@ -423,11 +372,15 @@ def track_files(
         store = _Store(max(memory_limit // 4, 1 << 26), folder)
         reg, skipped, sources = _read_all(paths, store, block_bytes)
         summary.skipped = skipped
-        ids, gid = reg.groups(group_rows or group_rows_for(memory_limit))
+        rows_per_group = group_rows or group_rows_for(memory_limit)
+        ids, gid = reg.groups(rows_per_group)
         n_groups = int(gid.max()) + 1 if gid.size else 0
         pieces = _split(store, ids, gid, n_groups, folder)
         vessel_groups = pieces[:n_groups]
         no_mmsi = pieces[n_groups]
+        # what is left of the budget holds the groups' state between the steps
+        budget = int(0.9 * memory_limit) - rss_bytes() - rows_per_group * TRACK_BYTES_PER_ROW
+        parked = Parked(folder, max(budget, 0))
 
         def emit(r: AisReports, tr: AisTracks) -> None:
             writer.write(r, track_columns(tr))
@@ -436,9 +389,10 @@ def track_files(
                 on_group(r, tr)
 
         if vessel_groups:
-            _track_groups(vessel_groups, sources, cfg, folder, emit)
+            _track_groups(vessel_groups, sources, cfg, parked, emit)
         if no_mmsi:
             r = _load(no_mmsi, sources)
             prep = prepare_reports(r)
-            emit(r, tracks_from_states(prep, track_vessel_groups([prep.inputs], cfg)[0]))
+            st = track_vessel_groups([prep.inputs], cfg)[0]
+            emit(r, tracks_from_states(prep.planes, st))
     return summary

@@ -115,9 +115,10 @@ def test_innovation_space_is_measured():
     from seatrack.tracking.gating import CARTESIAN, POLAR, innovation_space
 
     spaces = {m: innovation_space(registry.build(m).filter, SN)
-              for m in ("ekf", "imm", "mm", "turning", "ekf-rb")}  # fmt: skip
-    assert spaces == {"ekf": POLAR, "imm": CARTESIAN, "mm": CARTESIAN, "turning": POLAR,
-                      "ekf-rb": POLAR}  # fmt: skip
+              for m in ("ekf", "imm", "mm", "mm-spec", "turning", "ekf-rb")}  # fmt: skip
+    # mm's default is a level IMM on the polar plots; mm-spec converts them (its source)
+    assert spaces == {"ekf": POLAR, "imm": CARTESIAN, "mm": POLAR, "mm-spec": CARTESIAN,
+                      "turning": POLAR, "ekf-rb": POLAR}  # fmt: skip
     assert innovation_space(registry.build("ekf", d=3).filter, SN) == POLAR
     assert innovation_space(registry.build("imm", d=3).filter, SN) == CARTESIAN
 

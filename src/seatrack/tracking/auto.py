@@ -60,14 +60,20 @@ P_SWITCH = 0.01
 AUTO_NOISE: dict[str, str] = {
     "ekf": "levels",  # 180.9 / 182.6 / 154.6 (its default q = 1 suits no target class)
     "ekf-rb": "wrap",  # 177.8 / 153.9: its sonar q (0.02 m/s^2) needs the manoeuvre level
-    "huber": "wrap",  # 183.7 / 157.7
-    "student-t": "wrap",  # 191.9 / 163.9
-    "robust": "own",  # 182.3 / 182.4: no gain, its defaults stay
-    "robust-adaptive": "own",  # 184.8 / 184.8
-    "turning": "own",  # 173.2 / 175.2: its own manoeuvre handling is better
+    "huber": "own",  # 178.6 / 178.6: a level IMM already (wrap is void)
+    "student-t": "own",  # 177.0 / 177.0: idem
+    "robust": "own",  # 180.8 / 180.8: idem
+    "robust-adaptive": "own",  # 180.5 / 180.5: idem
+    "turning": "own",  # 182.1 / 182.1: idem
     "imm": "own",  # 184.2 / 184.2: its update starts from its model states (wrap is void)
-    "mm": "own",  # 249.2 / 249.2: idem
+    "mm": "own",  # 182.1 / 182.1: a level IMM already
     "mm-rangerate": "own",  # as mm (needs range rate: not in the tuning scenarios)
+    # the sources' methods run as their sources describe, process noise included
+    "turning-spec": "own",  # 173.2 / 175.2
+    "robust-spec": "own",  # 182.3 / 182.4
+    "robust-adaptive-spec": "own",  # 184.8 / 184.8
+    "mm-spec": "own",  # 249.2 / 249.2
+    "mm-rangerate-spec": "own",
 }
 
 #: configuration keys that set a method's process noise or target class

@@ -18,10 +18,13 @@ from seatrack.filters.base import (
     plot_gaussian,
 )
 from seatrack.filters.ekf import EKF, EKFConfig
+from seatrack.filters.registry import METHODS, method_class
+from seatrack.io.multitarget import sensor_noise
 from seatrack.models.motion import cv_noise, cv_transition
 from seatrack.simulate.multitarget import TargetPopulation, simulate_multitarget
 from seatrack.simulate.scenarios import SensorConfig
 from seatrack.tracking import MultiTargetTracker, TrackerConfig, TrackStatus
+from seatrack.tracking.auto import per_track_filter, scan_period
 
 SN = SensorNoise(sigma_range=15.0, sigma_azimuth=np.radians(0.3))
 
@@ -274,3 +277,33 @@ def test_3d_plots_with_range_rate():
     s = _score(sim, out)
     assert s.scans.n_missed[sim.scan_times >= 20].mean() < 0.3
     assert np.isfinite(out.columns["z_m"]).all()
+
+
+def _rr_scenario(seed=11):
+    sn = SensorNoise(sigma_range=15.0, sigma_azimuth=np.radians(0.3), sigma_range_rate=0.5)
+    radar = SensorConfig(
+        "r", "radar2d", ("azimuth", "range", "range_rate"),
+        (sn.sigma_azimuth, sn.sigma_range, sn.sigma_range_rate),
+        p_detect=0.95, clutter_density=5.0, clutter_range=(500.0, 13000.0), scan_period=2.5,
+    )  # fmt: skip
+    pop = TargetPopulation(targets=4, births_per_scan=0.0, mean_life=0.0, crossings=0,
+                           range_limits=(2000.0, 12000.0))  # fmt: skip
+    return simulate_multitarget(pop, radar, 100.0, np.random.default_rng(seed))
+
+
+@pytest.mark.parametrize("name", sorted(METHODS))
+def test_every_registered_method_is_a_per_track_filter(name):
+    """Issue 15: any registered method (the IMM and the sources' methods included) tracks
+    unlabelled plots with clutter, given only the sensor noise."""
+    needs_rr = getattr(method_class(name), "needs_range_rate", False)
+    sim = _rr_scenario() if needs_rr else _scenario(targets=4, duration=100.0)
+    table = {"sigma_range_m": 15.0, "sigma_azimuth_deg": 0.3}
+    if needs_rr:
+        table["sigma_range_rate_mps"] = 0.5
+    method, _ = per_track_filter(name, table, 2, needs_rr, scan_period(sim.plots.t))
+    out = MultiTargetTracker(method.filter, sensor_noise(table)).run(method.prepare(sim.plots))
+    s = _score(sim, out)
+    late = sim.scan_times >= 30.0
+    assert s.scans.n_missed[late].mean() < 0.5  # every target held after initiation
+    assert s.scans.n_false[late].mean() < 0.5
+    assert np.isfinite(out.columns["x_m"]).all() and np.isfinite(out.columns["vx_mps"]).all()

@@ -4,7 +4,7 @@ What the measurements made the library's defaults (the level IMM with the contam
 update, :mod:`seatrack.filters.levels`; the IMM with range rate) runs from the library here
 (rows ``label=method``: configurations of registered methods). What remains are batched
 prototypes (all runs of a set at once) of the ideas the measurements did NOT adopt, kept so
-that the numbers in ``docs/turning.md`` ("Research: what else was measured") can be
+that the numbers in ``docs/defaults.md`` ("Research: what else was measured") can be
 reproduced. Each prototype gets only what a user gives -- the sensor's nominal noise --
 unless its label says ``+class`` (the target class of the set,
 :mod:`seatrack.models.targets`); ``ORACLE`` rows know the truth.

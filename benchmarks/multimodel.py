@@ -1,4 +1,4 @@
-"""Benchmark: the multiple-model filter with range rate (JP H06-95138, ``specs/multimodel.md``)
+"""Benchmark: the multiple-model filter with range rate (JP H06-95138, ``docs/multimodel.md``)
 against its own ablations, a standard IMM and a single CV EKF.
 
 Scenarios (``make_run``): a 3-D radar at the origin watches a target at 200-300 m/s and

@@ -1,6 +1,6 @@
 """Ramazanov's robust / adaptive-robust sonar tracker: the paper's Monte-Carlo experiment.
 
-Reproduces the set-up of ``specs/robust.md`` ("Paper's Monte-Carlo set-up"): 500 runs,
+Reproduces the set-up of ``docs/robust.md`` ("Paper's Monte-Carlo set-up"): 500 runs,
 epsilon = 0.2, range sigma 1.5 m (anomalous variance x10), bearing sigma 2 deg (x25),
 initial range 900-950 m, window n = 3 (2...4), injected noise L = P/3 (along the beam) and
 P/10 (across), truncated filters; plus a manoeuvring case. Compared: algorithm R, algorithm

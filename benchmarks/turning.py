@@ -1,4 +1,4 @@
-"""Benchmark: turning-target filter (CN 104407337, ``specs/turning.md``) vs fixed-Q EKFs and an IMM.
+"""Benchmark: turning-target filter (CN 104407337, ``docs/turning.md``) vs fixed-Q EKFs and an IMM.
 
 Scenario sets (each run draws its own scenario from its seed; all runs of a set share
 the scan times so the fixed-Q EKFs and the IMM run as one vectorised batch):

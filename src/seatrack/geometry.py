@@ -3,7 +3,7 @@
 This is the *only* module in seatrack that turns vectors into bearings. Every other
 module calls :func:`bearing` / :func:`wrap_pi` rather than writing ``atan2`` itself.
 
-Conventions (shared by all five methods, see ``specs/README.md``)
+Conventions (shared by all five methods, see ``docs/conventions.md``)
 -----------------------------------------------------------------
 * Horizontal frame: ``x`` = East, ``y`` = North, ``z`` = Up. Metres, seconds, radians.
 * Bearing, course, heading and azimuth: clockwise from North, ``atan2(dx, dy)``.

@@ -1,4 +1,4 @@
-"""Tests of the turning-target filter (CN 104407337, specs/turning.md): each step alone,
+"""Tests of the turning-target filter (CN 104407337, docs/turning.md): each step alone,
 then the whole filter on (near) noiseless turns."""
 
 from __future__ import annotations

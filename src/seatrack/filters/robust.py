@@ -1,6 +1,6 @@
 """Ramazanov's robust (algorithm R) and adaptive-robust (algorithm A) sonar tracking filter.
 
-Spec: ``specs/robust.md`` (M. A. Ramazanov, "Synthesis of a robust tracking system for a
+Spec: ``docs/robust.md`` (M. A. Ramazanov, "Synthesis of a robust tracking system for a
 marine moving object", 2008). An active sonar on a (possibly moving) own ship measures
 range ``Z^R`` and true bearing ``Z^AZ`` of a target. The filter works in the
 **beam frame** (spec section "Beam frame"): the beam is steered to the predicted bearing

@@ -1,6 +1,6 @@
 """Baselines for the robust sonar tracker, on the interface of :mod:`seatrack.filters.robust`.
 
-Spec ``specs/robust.md`` ("Paper's Monte-Carlo set-up" and "Beyond the paper"). All filters
+Spec ``docs/robust.md`` ("Paper's Monte-Carlo set-up" and "Beyond the paper"). All filters
 run the full Cartesian state ``[x, y, vx, vy(, ax, ay)]`` (East, North) with the 2-D
 range/bearing measurement :class:`seatrack.models.measurement.RangeBearing` and the
 compiled :func:`seatrack.kalman.extended_update` (Joseph form), vectorised over a leading

@@ -1,4 +1,4 @@
-"""Turning-target radar plot filter (CN 104407337 A; spec ``specs/turning.md``).
+"""Turning-target radar plot filter (CN 104407337 A; spec ``docs/turning.md``).
 
 A constant-velocity EKF on radar plots (range, azimuth[, elevation]) whose process noise
 is raised for the next scan only when a second filter, running on the EKF's heading,
@@ -122,7 +122,7 @@ class TurnState(IntEnum):
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class TurningConfig:
-    """Parameters of the turning-target filter (defaults from ``specs/turning.md``); the
+    """Parameters of the turning-target filter (defaults from ``docs/turning.md``); the
     plot noise is the shared sensor section (:class:`~seatrack.filters.base.SensorNoise`).
 
     Keys (``--config``) in brackets; fields are SI and radians.

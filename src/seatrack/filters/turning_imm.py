@@ -1,6 +1,6 @@
 """``seatrack track --method turning``: the turning-target filter as a level IMM.
 
-The patent's filter (CN 104407337, ``specs/turning.md``; ``--method turning-spec``) raises
+The patent's filter (CN 104407337, ``docs/turning.md``; ``--method turning-spec``) raises
 the process noise of a constant-velocity EKF only on the scans where a fuzzy vote on the
 heading filter's turn rate sees the turn rate *change*: in a steady turn the noise returns
 to nominal and the filter lags. Measured on scenarios no method was tuned on

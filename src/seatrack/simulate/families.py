@@ -22,7 +22,7 @@ nominal noise), reproducible from the seed:
   in a steady turn -- structurally different from legs and turns.
 
 Every family accepts ``epsilon``: the fraction of plot components drawn from a wide
-noise (Tukey-Huber contamination as in Ramazanov's set-up, ``specs/robust.md``: variance
+noise (Tukey-Huber contamination as in Ramazanov's set-up, ``docs/robust.md``: variance
 x10 in range, x25 in azimuth); :attr:`Scenario.outlier` says which.
 
 Seeds: **TUNING** seeds are ``0 <= seed < 1_000_000`` and **HEADLINE** seeds

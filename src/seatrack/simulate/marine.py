@@ -1,4 +1,4 @@
-"""Monte-Carlo batches of Ramazanov's sonar scenario (spec ``specs/robust.md``).
+"""Monte-Carlo batches of Ramazanov's sonar scenario (spec ``docs/robust.md``).
 
 The truth kinematics of the paper -- a target driven by tangential acceleration ``a_L`` and
 turn rate ``w_L`` (spec "Truth model"), seen from a moving own ship -- are exactly the legs

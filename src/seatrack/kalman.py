@@ -52,6 +52,8 @@ import numpy as np
 from numba import guvectorize, njit
 from numpy.typing import ArrayLike, NDArray
 
+from seatrack.information import as_float64
+
 FloatArray = NDArray[np.float64]
 
 __all__ = [
@@ -403,10 +405,6 @@ def _outputs(n: int, m: int) -> tuple[FloatArray, ...]:
     return e(n), e((n, n)), e(m), e((m, m)), e((n, m))
 
 
-def _f(a: ArrayLike) -> FloatArray:
-    return np.asarray(a, dtype=np.float64)
-
-
 def predict(
     x: ArrayLike, P: ArrayLike, F: ArrayLike, Q: ArrayLike
 ) -> tuple[FloatArray, FloatArray]:
@@ -444,7 +442,7 @@ def extended_predict(
 
     ``F`` is the Jacobian of ``f`` at the prior state. Returns ``(fx, P)``.
     """
-    return _f(fx), _cov_predict_kernel(P, F, Q)
+    return as_float64(fx), _cov_predict_kernel(P, F, Q)
 
 
 def update(
@@ -519,7 +517,7 @@ def extended_update(
     -------
     UpdateResult
     """
-    zz = _f(z)
+    zz = as_float64(z)
     ang = np.zeros(zz.shape[-1]) if angular is None else np.asarray(angular, dtype=np.float64)
     if _is_single(9, x, P, zz, hx, H, R):
         xo, Po, y, S, K = _outputs(x.shape[0], zz.shape[0])  # type: ignore[union-attr]
@@ -558,8 +556,8 @@ def nis_log_likelihood(y: ArrayLike, S: ArrayLike) -> tuple[Any, Any]:
 
     Used where a likelihood is needed without a state update (e.g. model probabilities).
     """
-    yy = _f(y)
-    SS = _f(S)
+    yy = as_float64(y)
+    SS = as_float64(S)
     L = np.linalg.cholesky(SS)
     w = np.linalg.solve(L, yy[..., None])[..., 0]
     nis = np.einsum("...i,...i->...", w, w)
@@ -569,5 +567,5 @@ def nis_log_likelihood(y: ArrayLike, S: ArrayLike) -> tuple[Any, Any]:
 
 def symmetrize(P: ArrayLike) -> FloatArray:
     """Return ``(P + P^T) / 2`` over the last two axes."""
-    PP = _f(P)
+    PP = as_float64(P)
     return 0.5 * (PP + np.swapaxes(PP, -1, -2))

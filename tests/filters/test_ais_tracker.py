@@ -654,3 +654,14 @@ def test_vessel_groups_share_the_offset_prior_and_equal_one_table() -> None:
     for p, g in zip(parts, groups, strict=True):
         for f in ("state", "std", "outlier_kind", "segment", "nis", "time_offset"):
             assert np.array_equal(getattr(whole, f)[p], getattr(g, f), equal_nan=True), f
+
+
+def test_vessel_rows_layout_and_largest_vessel_per_chunk():
+    from seatrack.filters.ais.kernel import largest_vessel, vessel_rows
+
+    vessel = np.array([0, 0, 0, 4, 7, 7], dtype=np.int64)
+    starts, chunks, t, xy, mask = vessel_rows(vessel, [0, 1, 2, 3, 4, 5], np.zeros((6, 2)), [1] * 6)
+    assert starts.tolist() == [0, 3, 4, 6]
+    assert t.dtype == np.float64 and xy.flags.c_contiguous and mask.dtype == np.bool_
+    sizes = [largest_vessel(starts, chunks, c) for c in range(chunks.size - 1)]
+    assert max(sizes) == 3 and min(sizes) >= 1

@@ -21,8 +21,10 @@ from seatrack.filters.ais.kernel import (
     KernelInputs,
     KernelOutputs,
     OutlierKind,
+    largest_vessel,
     run_kernel,
     vessel_layout,
+    vessel_rows,
     vessel_starts,
 )
 from seatrack.geometry import KNOT_MPS
@@ -115,14 +117,8 @@ def neighbour_plausibility(
     n = t.size
     v_prev, v_next, a_chord = np.empty(n), np.empty(n), np.empty(n)
     if n:
-        starts, chunks = vessel_layout(vessel)
-        c = np.ascontiguousarray
         _plausibility_kernel(
-            starts,
-            chunks,
-            c(t, dtype=np.float64),
-            c(xy, dtype=np.float64),
-            c(accepted, dtype=np.bool_),
+            *vessel_rows(vessel, t, xy, accepted),
             *_allowances(config)[:2],
             v_prev,
             v_next,
@@ -177,9 +173,7 @@ def _plausibility_kernel(
     starts, chunks, t, z, accepted, d0, tau, v_prev, v_next, a_chord
 ):  # pragma: no cover - compiled
     for c in prange(chunks.size - 1):
-        size = 1
-        for v in range(chunks[c], chunks[c + 1]):
-            size = max(size, starts[v + 1] - starts[v])
+        size = largest_vessel(starts, chunks, c)
         nxt = np.empty(size, dtype=np.int64)
         for v in range(chunks[c], chunks[c + 1]):
             a, b = starts[v], starts[v + 1]
@@ -244,9 +238,7 @@ def _revisit_kernel(
     starts, chunks, t, z, use, flag, segment, force, par, changed
 ):  # pragma: no cover - compiled
     for c in prange(chunks.size - 1):
-        size = 1
-        for v in range(chunks[c], chunks[c + 1]):
-            size = max(size, starts[v + 1] - starts[v])
+        size = largest_vessel(starts, chunks, c)
         acc, rej = np.empty(size, np.bool_), np.empty(size, np.bool_)
         score, vp, vn, ac = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
         nxt = np.empty(size, dtype=np.int64)

@@ -57,6 +57,8 @@ from seatrack.information import as_float64
 FloatArray = NDArray[np.float64]
 
 __all__ = [
+    "matmul_core",
+    "sym_matmul_core",
     "cov_core",
     "mahalanobis",
     "cholesky_core",
@@ -79,25 +81,40 @@ _LOG_2PI = math.log(2.0 * math.pi)
 # ---------------------------------------------------------------------------
 # Compiled kernels (one core each, broadcast by the gufunc machinery)
 # ---------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def matmul_core(A, B, out):  # pragma: no cover - compiled
+    """``out = A B`` (each entry summed over ``k`` in ascending order)."""
+    for i in range(A.shape[0]):
+        for j in range(B.shape[1]):
+            s = 0.0
+            for k in range(A.shape[1]):
+                s += A[i, k] * B[k, j]
+            out[i, j] = s
+
+
+@njit(cache=True, inline="always")
+def sym_matmul_core(A, B, C, out):  # pragma: no cover - compiled
+    """``out = A B + (C + C^T) / 2`` for a product ``A B`` symmetric in exact arithmetic:
+    computed on and above the diagonal and mirrored, so ``out`` is exactly symmetric.
+    ``C`` may be ``out`` itself when it is exactly symmetric (``out += A B``)."""
+    n = out.shape[0]
+    for i in range(n):
+        for j in range(i, n):
+            s = 0.0
+            for k in range(A.shape[1]):
+                s += A[i, k] * B[k, j]
+            v = s + 0.5 * (C[i, j] + C[j, i])
+            out[i, j] = v
+            out[j, i] = v
+
+
 @njit(cache=True)
 def cov_core(P, F, Q, Po):  # pragma: no cover - compiled
     """``Po = F P F^T + Q`` (symmetrised)."""
     n = P.shape[0]
     FP = np.empty((n, n))
-    for i in range(n):
-        for j in range(n):
-            s = 0.0
-            for k in range(n):
-                s += F[i, k] * P[k, j]
-            FP[i, j] = s
-    for i in range(n):
-        for j in range(i, n):
-            s = 0.0
-            for k in range(n):
-                s += FP[i, k] * F[j, k]
-            v = s + 0.5 * (Q[i, j] + Q[j, i])
-            Po[i, j] = v
-            Po[j, i] = v
+    matmul_core(F, P, FP)
+    sym_matmul_core(FP, F.T, Q, Po)
 
 
 @njit(cache=True)
@@ -190,22 +207,8 @@ def update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
     AP = buf[o : o + n * n].reshape((n, n))
     o += n * n
     KR = buf[o : o + n * m].reshape((n, m))
-    # PHt = P H^T  (n, m)
-    for i in range(n):
-        for j in range(m):
-            s = 0.0
-            for k in range(n):
-                s += P[i, k] * H[j, k]
-            PHt[i, j] = s
-    # S = H P H^T + R, symmetrised
-    for i in range(m):
-        for j in range(i, m):
-            s = 0.0
-            for k in range(n):
-                s += H[i, k] * PHt[k, j]
-            v = s + 0.5 * (R[i, j] + R[j, i])
-            So[i, j] = v
-            So[j, i] = v
+    matmul_core(P, H.T, PHt)  # P H^T  (n, m)
+    sym_matmul_core(H, PHt, R, So)  # S = H P H^T + R, symmetrised
     # Cholesky S = L L^T; w = L^-1 y; nis = w.w
     logdet = cholesky_core(So, L)
     if not logdet == logdet:  # NaN: S not positive definite
@@ -237,18 +240,8 @@ def update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
             for k in range(m):
                 s += Ko[i, k] * H[k, j]
             A[i, j] = (1.0 if i == j else 0.0) - s
-    for i in range(n):
-        for j in range(n):
-            s = 0.0
-            for k in range(n):
-                s += A[i, k] * P[k, j]
-            AP[i, j] = s
-    for i in range(n):
-        for j in range(m):
-            s = 0.0
-            for k in range(m):
-                s += Ko[i, k] * R[k, j]
-            KR[i, j] = s
+    matmul_core(A, P, AP)
+    matmul_core(Ko, R, KR)
     for i in range(n):
         for j in range(i, n):
             s = 0.0

@@ -84,7 +84,7 @@ from seatrack.filters.robust_baselines import (
     huber_update,
     student_t_update,
 )
-from seatrack.kalman import cholesky_core, forward_core
+from seatrack.kalman import cholesky_core, forward_core, matmul_core
 from seatrack.models.measurement import polar_measurement
 from seatrack.models.motion import cv_matrices
 from seatrack.models.targets import TargetClass
@@ -326,18 +326,8 @@ def _mixture_core(P, y, H, r, G, logp, k, dx, Po, ll, pout):  # pragma: no cover
     W = np.empty((m, m))
     PW = np.empty((n, m))
     for i in range(N):
-        for a in range(n):
-            for c in range(m):
-                v = 0.0
-                for b in range(n):
-                    v += P[i, a, b] * H[i, c, b]
-                PHt[a, c] = v
-        for a in range(m):
-            for c in range(m):
-                v = 0.0
-                for b in range(n):
-                    v += H[i, a, b] * PHt[b, c]
-                HPH[a, c] = v
+        matmul_core(P[i], H[i].T, PHt)
+        matmul_core(H[i], PHt, HPH)
         bad = False
         for g in range(C):
             for a in range(m):
@@ -396,11 +386,7 @@ def _mixture_core(P, y, H, r, G, logp, k, dx, Po, ll, pout):  # pragma: no cover
             for c in range(m):
                 v += PHt[a, c] * ub[c]
             dx[i, a] = v
-            for c in range(m):
-                v = 0.0
-                for b in range(m):
-                    v += PHt[a, b] * W[b, c]
-                PW[a, c] = v
+        matmul_core(PHt, W, PW)
         for a in range(n):
             for b in range(a, n):
                 v = P[i, a, b]

@@ -9,9 +9,10 @@ are plain arithmetic broadcast over leading dimensions):
 
 * S1 :func:`ekf_step` -- CV-EKF predict + update on one plot (``seatrack.kalman``,
   ``seatrack.models``); :func:`initial_state` starts it from the first plot.
-* S2 :func:`velocity_significance` (``d_t``), :func:`heading`, :func:`heading_variance`,
-  :func:`heading_filter_init` / :func:`heading_filter_step` (the (b, omega) filter with
-  the wrapped heading innovation; :mod:`seatrack.filters.heading`).
+* S2 in :mod:`seatrack.filters.heading` (pure reference functions; compiled in
+  :mod:`seatrack.filters.turning_kernel`): ``velocity_significance`` (``d_t``),
+  ``heading``, ``heading_variance``, ``heading_filter_init`` / ``heading_filter_step``
+  (the (b, omega) filter with the wrapped heading innovation).
 * S3 :func:`turn_rate_significance` (``d_omega``) and :func:`push_turn_rate` (FIFO queue).
 * S4 :func:`fuzzy_vote` (rising / falling count vote with the ``delta_omega`` threshold).
 * S5 :func:`noise_gain` ``c(delta_omega)``; the gain applies to the next prediction only
@@ -61,16 +62,6 @@ from seatrack.filters.base import (
     usable,
     wrap_angles,
 )
-from seatrack.filters.heading import (
-    HeadingEstimate,
-    heading,
-    heading_filter_init,
-    heading_filter_noise,
-    heading_filter_step,
-    heading_jacobian,
-    heading_variance,
-    velocity_significance,
-)
 from seatrack.filters.turning_kernel import turn_logic
 from seatrack.geometry import bearing
 from seatrack.models import RangeBearing, RangeBearingElevation
@@ -83,20 +74,12 @@ FloatArray = NDArray[np.float64]
 __all__ = [
     "TurnState",
     "TurningConfig",
-    "HeadingEstimate",
     "TurningStep",
     "TurningTrack",
     "TurningFilter",
     "Turning",
     "initial_state",
     "ekf_step",
-    "velocity_significance",
-    "heading",
-    "heading_jacobian",
-    "heading_variance",
-    "heading_filter_noise",
-    "heading_filter_init",
-    "heading_filter_step",
     "turn_rate_significance",
     "push_turn_rate",
     "fuzzy_vote",

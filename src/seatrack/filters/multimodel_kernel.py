@@ -12,6 +12,7 @@ import math
 import numpy as np
 from numba import guvectorize, njit
 
+from seatrack.filters.imm import markov_predict_core
 from seatrack.kalman import (
     cholesky_core,
     forward_core,
@@ -85,11 +86,7 @@ def _integrated_prediction(xc, Pb, beta, pi, alphas, gam, integ, bm, xp, Pp):  #
     """Step 4 prior ``bm = pi beta`` and steps 10-11: integrated prediction ``xp``, ``Pp``."""
     n = xc.shape[0]
     N, d = alphas.shape
-    for a in range(N):
-        s = 0.0
-        for b in range(N):
-            s += pi[a, b] * beta[b]
-        bm[a] = s
+    markov_predict_core(pi.T, beta, bm)  # pi is column-stochastic
     um = np.empty(d)
     Cm = np.empty((d, d))
     _spread(bm, alphas, um, Cm)

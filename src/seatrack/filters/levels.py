@@ -61,7 +61,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.special import gammaln, ndtr
 
 from seatrack import kalman
-from seatrack.config import param
+from seatrack.config import param, redefault
 from seatrack.filters.base import (
     Plots,
     SensorNoise,
@@ -219,15 +219,8 @@ class ContaminatedConfig(OutlierConfig, LevelConfig):
     prior ``epsilon = 0.1`` per channel, learnt over about 30 scans: chosen on the tuning
     seeds of ``benchmarks/defaults.py`` among a fixed 0.1 and memories of 30 and 100)."""
 
-    outlier_probability: float = param(
-        0.1, doc="prior probability that a plot channel is an outlier (0: Gaussian)", min=0,
-        max=0.5,
-    )  # fmt: skip
-    outlier_memory: float = param(
-        30.0, key="outlier_memory_scans",
-        doc="learn each channel's outlier probability over about this many scans (0: fixed)",
-        min=0,
-    )  # fmt: skip
+    outlier_probability: float = redefault(OutlierConfig, "outlier_probability", 0.1)
+    outlier_memory: float = redefault(OutlierConfig, "outlier_memory", 30.0)
     use_range_rate: bool = param(True, doc="use the plots' range rate when they have one")
 
 

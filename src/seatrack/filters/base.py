@@ -69,6 +69,7 @@ __all__ = [
     "wrap_angles",
     "run_tracks",
     "COMMON_COLUMNS",
+    "CartesianState",
     "STATE_COLUMNS",
 ]
 
@@ -386,6 +387,17 @@ def cartesian_names(d: int) -> tuple[str, ...]:
     """``x, y, [z], vx, vy, [vz]``: the first components of every filter's state."""
     axes = ("x", "y", "z")[:d]
     return axes + tuple("v" + a for a in axes)
+
+
+class CartesianState:
+    """Base of the filters whose state is Cartesian position and velocity on ``d`` axes
+    (:func:`cartesian_names`)."""
+
+    d: int
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return cartesian_names(self.d)
 
 
 def converted_positions(

@@ -63,10 +63,10 @@ from scipy.special import gammaln, ndtr
 from seatrack import kalman
 from seatrack.config import param, redefault
 from seatrack.filters.base import (
+    CartesianState,
     Plots,
     SensorNoise,
     TrackState,
-    cartesian_names,
     common_columns,
     finish_update,
     measurement_noise,
@@ -458,7 +458,7 @@ class _Updated:
     outlier: FloatArray
 
 
-class LevelIMM:
+class LevelIMM(CartesianState):
     """IMM of constant-velocity EKFs with process-noise levels (Gaussian plots).
 
     ``TrackState.x``/``P``: the combined estimate ``[x, y, (z), vx, vy, (vz)]``; ``aux``:
@@ -501,10 +501,6 @@ class LevelIMM:
 
     def _rule_setup(self) -> None:
         """Constants of the update rule (subclasses)."""
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        return cartesian_names(self.d)
 
     # -- contract ------------------------------------------------------------------
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:

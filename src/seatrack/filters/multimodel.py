@@ -63,10 +63,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from seatrack.config import param
 from seatrack.filters.base import (
+    CartesianState,
     Plots,
     SensorNoise,
     TrackState,
-    cartesian_names,
     common_columns,
     conversion_param,
     converted_positions,
@@ -536,7 +536,7 @@ class MultiModelRangeRateConfig(MultiModelTrackConfig):
     )
 
 
-class MultiModel:
+class MultiModel(CartesianState):
     """The multiple-model filter on the filter contract (``--method mm``).
 
     ``TrackState.x``/``P`` hold the integrated estimate: after :meth:`predict` the
@@ -577,10 +577,6 @@ class MultiModel:
             ),
             d=d,
         )
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        return cartesian_names(self.d)
 
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
         xx = np.asarray(x, dtype=float)

@@ -48,11 +48,11 @@ from numpy.typing import ArrayLike, NDArray
 from seatrack import kalman
 from seatrack.config import param
 from seatrack.filters.base import (
+    CartesianState,
     Plots,
     PlotStatus,
     SensorNoise,
     TrackState,
-    cartesian_names,
     common_columns,
     finish_update,
     plot_gaussian,
@@ -462,7 +462,7 @@ class TurningTrack:
 # ---------------------------------------------------------------------------
 # The filter on the contract (batched), and the one-track shell
 # ---------------------------------------------------------------------------
-class Turning:
+class Turning(CartesianState):
     """The turning-target filter (spec S1-S6) on the filter contract, for a batch of tracks.
 
     ``TrackState.x``/``P``: the CV-EKF state ``[x, y, (z), vx, vy, (vz)]``. ``aux``: the
@@ -491,10 +491,6 @@ class Turning:
         self.R = plot_covariance(sn.sigma_range, sn.sigma_azimuth, sn.sigma_elevation, d)
         self._angular = self.model.angular.astype(float)
         self.v_threshold = float(d) if c.velocity_threshold is None else c.velocity_threshold
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        return cartesian_names(self.d)
 
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
         st = TrackState.new(t, x, P)

@@ -50,6 +50,9 @@ __all__ = [
     "run_kernel",
     "vessel_chunks",
     "vessel_layout",
+    "thread_chunks",
+    "vessel_index",
+    "take_rows",
     "largest_vessel",
     "vessel_rows",
     "vessel_starts",
@@ -638,11 +641,30 @@ def largest_vessel(starts, chunks, c):  # pragma: no cover - compiled
     return size
 
 
+def thread_chunks(starts: NDArray[np.int64]) -> NDArray[np.int64]:
+    """The chunks of vessels that the compiled stages run on numba's threads
+    (:func:`vessel_chunks`, 8 per thread)."""
+    return vessel_chunks(starts, 8 * numba.get_num_threads())
+
+
 def vessel_layout(vessel: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Vessel boundaries (:func:`vessel_starts`) and the chunks of vessels that the compiled
-    stages run on numba's threads (:func:`vessel_chunks`, 8 per thread)."""
+    """Vessel boundaries (:func:`vessel_starts`) and their :func:`thread_chunks`."""
     starts = vessel_starts(vessel)
-    return starts, vessel_chunks(starts, 8 * numba.get_num_threads())
+    return starts, thread_chunks(starts)
+
+
+def vessel_index(starts: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Index of each row's vessel, ``(N,)``, from the boundaries ``starts``."""
+    return np.repeat(np.arange(starts.size - 1), np.diff(starts))
+
+
+def take_rows(inp: KernelInputs, rows: NDArray[np.bool_] | None, **new: NDArray) -> KernelInputs:
+    """The rows ``rows`` of ``inp`` (whole vessels; None: all, not copied), with per-row
+    fields replaced by ``new`` (full length); ``starts`` follows."""
+    if rows is None:
+        return inp._replace(**new)
+    kept = {f: new.get(f, getattr(inp, f))[rows] for f in KernelInputs._fields[1:]}
+    return KernelInputs(vessel_starts(vessel_index(inp.starts)[rows]), **kept)
 
 
 def vessel_rows(
@@ -670,7 +692,7 @@ def run_kernel(inp: KernelInputs, cfg: AisTrackerConfig) -> KernelOutputs:
     c = np.ascontiguousarray
     args = KernelInputs._make(c(a) for a in inp)
     par = kernel_params(cfg)
-    chunks = vessel_chunks(args.starts, 8 * numba.get_num_threads())
+    chunks = thread_chunks(args.starts)
     _track_kernel(args, par, out, chunks)
     # the smoother can step outside the physical limits the filter keeps: project again
     constrain_rows(out.state, par.vmax, par.amax, par.w_max)

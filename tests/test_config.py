@@ -1,11 +1,12 @@
 """The one configuration layer: edge units, unknown keys, types, bounds."""
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import pytest
 
-from seatrack.config import ConfigError, describe, param, parse_config, to_edge
+from seatrack.config import ConfigError, describe, param, parse_config, redefault, to_edge
 
 
 @dataclass(frozen=True)
@@ -80,3 +81,15 @@ def test_describe_lists_edge_defaults():
     rows = {r[0]: r for r in describe(Demo)}
     assert rows["sigma_azimuth_deg"][1] == pytest.approx(0.5)
     assert rows["sigma_azimuth_deg"][2] == "deg"
+
+
+def test_redefault_changes_only_the_default_in_edge_units():
+    @dataclass(frozen=True)
+    class Faster(Demo):
+        speed: float = redefault(Demo, "speed", 20.0)
+
+    assert Faster().speed == pytest.approx(20.0 * 1852.0 / 3600.0)
+    assert Faster().sigma_azimuth == Demo().sigma_azimuth
+    assert parse_config(Faster, {"speed_knots": 5.0}).speed == pytest.approx(5 * 1852 / 3600)
+    meta = {f.name: f.metadata for f in dataclasses.fields(Faster)}
+    assert meta["speed"] == {f.name: f.metadata for f in dataclasses.fields(Demo)}["speed"]

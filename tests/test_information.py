@@ -11,6 +11,7 @@ import pytest
 from seatrack.information import (
     JACOBIAN_RTOL,
     SingularMatrixError,
+    as_float64,
     check_information,
     check_jacobian,
     covariance_from_jacobian,
@@ -133,3 +134,9 @@ def test_ill_conditioned_but_regular_jacobian_is_inverted_from_its_svd():
         P, chk = covariance_from_jacobian(J * scale)
         assert chk.full_rank and chk.smallest < 1e-5 * chk.largest
         np.testing.assert_allclose(P * np.outer(scale, scale), exact, rtol=1e-6)
+
+
+def test_as_float64_converts_and_does_not_copy_float64():
+    a = as_float64([1, 2])
+    assert a.dtype == np.float64 and a.tolist() == [1.0, 2.0]
+    assert as_float64(a) is a

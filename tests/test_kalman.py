@@ -160,3 +160,20 @@ def test_nis_log_likelihood_helper_matches_update():
 def test_log_likelihood_finite_for_huge_innovation():
     r = kalman.update(np.zeros(2), np.eye(2), np.array([1e8]), np.array([[1.0, 0.0]]), np.eye(1))
     assert np.isfinite(r.log_likelihood) and r.log_likelihood < -1e15
+
+
+def test_matmul_cores_match_numpy_and_sym_matmul_is_exactly_symmetric():
+    rng = np.random.default_rng(3)
+    A, B = rng.normal(size=(4, 3)), rng.normal(size=(3, 5))
+    out = np.empty((4, 5))
+    kalman.matmul_core(A, B, out)
+    np.testing.assert_allclose(out, A @ B, rtol=1e-14, atol=1e-14)
+    C = rng.normal(size=(4, 4))
+    S = np.empty((4, 4))
+    kalman.sym_matmul_core(A, A.T, C, S)
+    np.testing.assert_allclose(S, A @ A.T + 0.5 * (C + C.T), rtol=1e-13, atol=1e-13)
+    assert np.array_equal(S, S.T)
+    before = S.copy()
+    kalman.sym_matmul_core(A, A.T, S, S)  # in place: S += A A^T
+    np.testing.assert_allclose(S, before + A @ A.T, rtol=1e-13, atol=1e-13)
+    assert np.array_equal(S, S.T)

@@ -45,6 +45,7 @@ FloatArray = NDArray[np.float64]
 
 __all__ = [
     "EPS",
+    "as_float64",
     "JACOBIAN_RTOL",
     "RankCheck",
     "SingularMatrixError",
@@ -64,6 +65,11 @@ EPS = float(np.finfo(np.float64).eps)
 
 #: relative tolerance on the scaled singular values of a whitened Jacobian
 JACOBIAN_RTOL = 1e-10
+
+
+def as_float64(a: ArrayLike) -> FloatArray:
+    """``a`` as a float64 array (no copy when it already is one)."""
+    return np.asarray(a, dtype=np.float64)
 
 
 def information_rtol(n: int) -> float:

@@ -52,9 +52,13 @@ import numpy as np
 from numba import guvectorize, njit
 from numpy.typing import ArrayLike, NDArray
 
+from seatrack.information import as_float64
+
 FloatArray = NDArray[np.float64]
 
 __all__ = [
+    "matmul_core",
+    "sym_matmul_core",
     "cov_core",
     "mahalanobis",
     "cholesky_core",
@@ -77,9 +81,40 @@ _LOG_2PI = math.log(2.0 * math.pi)
 # ---------------------------------------------------------------------------
 # Compiled kernels (one core each, broadcast by the gufunc machinery)
 # ---------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def matmul_core(A, B, out):  # pragma: no cover - compiled
+    """``out = A B`` (each entry summed over ``k`` in ascending order)."""
+    for i in range(A.shape[0]):
+        for j in range(B.shape[1]):
+            s = 0.0
+            for k in range(A.shape[1]):
+                s += A[i, k] * B[k, j]
+            out[i, j] = s
+
+
+@njit(cache=True, inline="always")
+def sym_matmul_core(A, B, C, out):  # pragma: no cover - compiled
+    """``out = A B + (C + C^T) / 2`` for a product ``A B`` symmetric in exact arithmetic:
+    computed on and above the diagonal and mirrored, so ``out`` is exactly symmetric.
+    ``C`` may be ``out`` itself when it is exactly symmetric (``out += A B``)."""
+    n = out.shape[0]
+    for i in range(n):
+        for j in range(i, n):
+            s = 0.0
+            for k in range(A.shape[1]):
+                s += A[i, k] * B[k, j]
+            v = s + 0.5 * (C[i, j] + C[j, i])
+            out[i, j] = v
+            out[j, i] = v
+
+
 @njit(cache=True)
 def cov_core(P, F, Q, Po):  # pragma: no cover - compiled
-    """``Po = F P F^T + Q`` (symmetrised)."""
+    """``Po = F P F^T + Q`` (symmetrised).
+
+    The two products are :func:`matmul_core` and :func:`sym_matmul_core` written out:
+    calling them here costs 3-5 % on the batched prediction (measured, best of 200
+    interleaved runs), the hottest kernel of every filter."""
     n = P.shape[0]
     FP = np.empty((n, n))
     for i in range(n):
@@ -188,22 +223,8 @@ def update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
     AP = buf[o : o + n * n].reshape((n, n))
     o += n * n
     KR = buf[o : o + n * m].reshape((n, m))
-    # PHt = P H^T  (n, m)
-    for i in range(n):
-        for j in range(m):
-            s = 0.0
-            for k in range(n):
-                s += P[i, k] * H[j, k]
-            PHt[i, j] = s
-    # S = H P H^T + R, symmetrised
-    for i in range(m):
-        for j in range(i, m):
-            s = 0.0
-            for k in range(n):
-                s += H[i, k] * PHt[k, j]
-            v = s + 0.5 * (R[i, j] + R[j, i])
-            So[i, j] = v
-            So[j, i] = v
+    matmul_core(P, H.T, PHt)  # P H^T  (n, m)
+    sym_matmul_core(H, PHt, R, So)  # S = H P H^T + R, symmetrised
     # Cholesky S = L L^T; w = L^-1 y; nis = w.w
     logdet = cholesky_core(So, L)
     if not logdet == logdet:  # NaN: S not positive definite
@@ -235,18 +256,8 @@ def update_core(x, P, y, H, R, xo, Po, So, Ko):  # pragma: no cover - compiled
             for k in range(m):
                 s += Ko[i, k] * H[k, j]
             A[i, j] = (1.0 if i == j else 0.0) - s
-    for i in range(n):
-        for j in range(n):
-            s = 0.0
-            for k in range(n):
-                s += A[i, k] * P[k, j]
-            AP[i, j] = s
-    for i in range(n):
-        for j in range(m):
-            s = 0.0
-            for k in range(m):
-                s += Ko[i, k] * R[k, j]
-            KR[i, j] = s
+    matmul_core(A, P, AP)
+    matmul_core(Ko, R, KR)
     for i in range(n):
         for j in range(i, n):
             s = 0.0
@@ -403,10 +414,6 @@ def _outputs(n: int, m: int) -> tuple[FloatArray, ...]:
     return e(n), e((n, n)), e(m), e((m, m)), e((n, m))
 
 
-def _f(a: ArrayLike) -> FloatArray:
-    return np.asarray(a, dtype=np.float64)
-
-
 def predict(
     x: ArrayLike, P: ArrayLike, F: ArrayLike, Q: ArrayLike
 ) -> tuple[FloatArray, FloatArray]:
@@ -444,7 +451,7 @@ def extended_predict(
 
     ``F`` is the Jacobian of ``f`` at the prior state. Returns ``(fx, P)``.
     """
-    return _f(fx), _cov_predict_kernel(P, F, Q)
+    return as_float64(fx), _cov_predict_kernel(P, F, Q)
 
 
 def update(
@@ -519,7 +526,7 @@ def extended_update(
     -------
     UpdateResult
     """
-    zz = _f(z)
+    zz = as_float64(z)
     ang = np.zeros(zz.shape[-1]) if angular is None else np.asarray(angular, dtype=np.float64)
     if _is_single(9, x, P, zz, hx, H, R):
         xo, Po, y, S, K = _outputs(x.shape[0], zz.shape[0])  # type: ignore[union-attr]
@@ -558,8 +565,8 @@ def nis_log_likelihood(y: ArrayLike, S: ArrayLike) -> tuple[Any, Any]:
 
     Used where a likelihood is needed without a state update (e.g. model probabilities).
     """
-    yy = _f(y)
-    SS = _f(S)
+    yy = as_float64(y)
+    SS = as_float64(S)
     L = np.linalg.cholesky(SS)
     w = np.linalg.solve(L, yy[..., None])[..., 0]
     nis = np.einsum("...i,...i->...", w, w)
@@ -569,5 +576,5 @@ def nis_log_likelihood(y: ArrayLike, S: ArrayLike) -> tuple[Any, Any]:
 
 def symmetrize(P: ArrayLike) -> FloatArray:
     """Return ``(P + P^T) / 2`` over the last two axes."""
-    PP = _f(P)
+    PP = as_float64(P)
     return 0.5 * (PP + np.swapaxes(PP, -1, -2))

@@ -654,3 +654,29 @@ def test_vessel_groups_share_the_offset_prior_and_equal_one_table() -> None:
     for p, g in zip(parts, groups, strict=True):
         for f in ("state", "std", "outlier_kind", "segment", "nis", "time_offset"):
             assert np.array_equal(getattr(whole, f)[p], getattr(g, f), equal_nan=True), f
+
+
+def test_vessel_rows_layout_and_largest_vessel_per_chunk():
+    from seatrack.filters.ais.kernel import largest_vessel, vessel_rows
+
+    vessel = np.array([0, 0, 0, 4, 7, 7], dtype=np.int64)
+    starts, chunks, t, xy, mask = vessel_rows(vessel, [0, 1, 2, 3, 4, 5], np.zeros((6, 2)), [1] * 6)
+    assert starts.tolist() == [0, 3, 4, 6]
+    assert t.dtype == np.float64 and xy.flags.c_contiguous and mask.dtype == np.bool_
+    sizes = [largest_vessel(starts, chunks, c) for c in range(chunks.size - 1)]
+    assert max(sizes) == 3 and min(sizes) >= 1
+
+
+def test_take_rows_keeps_whole_vessels_and_recomputes_their_boundaries():
+    from seatrack.filters.ais.kernel import KernelInputs, take_rows, vessel_index
+
+    n = 6
+    starts = np.array([0, 3, 4, 6], dtype=np.int64)
+    inp = KernelInputs(starts, *(np.arange(n, dtype=float) for _ in KernelInputs._fields[1:]))
+    assert vessel_index(starts).tolist() == [0, 0, 0, 1, 2, 2]
+    keep = np.array([True, True, True, False, True, True])
+    sub = take_rows(inp, keep, toff=np.full(n, 7.0))
+    assert sub.starts.tolist() == [0, 3, 5] and sub.t.tolist() == [0, 1, 2, 4, 5]
+    assert sub.toff.tolist() == [7.0] * 5
+    same = take_rows(inp, None, sig=np.zeros(n))
+    assert same.t is inp.t and same.sig.tolist() == [0.0] * n

@@ -209,3 +209,14 @@ def test_ekf_isolates_a_bad_plot(bad):
     assert np.allclose(cols["x_m"][30:], good["x_m"][30:])
     if not np.isfinite(bad):
         assert cols["status"][12] == "rejected"
+
+
+def test_cartesian_state_names_follow_d():
+    from seatrack.filters.base import CartesianState
+
+    class Shell(CartesianState):
+        def __init__(self, d: int) -> None:
+            self.d = d
+
+    assert Shell(2).state_names == ("x", "y", "vx", "vy")
+    assert Shell(3).state_names == ("x", "y", "z", "vx", "vy", "vz")

@@ -234,3 +234,15 @@ def test_filter_imm_of_turning_filter_and_cv_ekf():
     assert np.sqrt(np.mean(err[late] ** 2)) < np.sqrt(np.mean(err_cv[late] ** 2))
     turn = (tr.t > 150) & (tr.t < 260)
     assert out["p_turning"][turn].mean() > out["p_turning"][tr.t < 100][10:].mean()
+
+
+def test_markov_predict_core_is_transition_transpose_times_probabilities():
+    from seatrack.filters.imm import markov_predict_core
+
+    PI = np.array([[0.9, 0.1], [0.3, 0.7]])
+    mu = np.array([0.25, 0.75])
+    out = np.empty(2)
+    markov_predict_core(PI, mu, out)
+    np.testing.assert_allclose(out, PI.T @ mu, rtol=1e-15)
+    markov_predict_core(PI.T.T, mu, out)  # any layout
+    assert out.sum() == pytest.approx(1.0)

@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from seatrack import kalman
+from seatrack.filters import heading as Hd
 from seatrack.filters import turning as T
 from seatrack.filters.base import SensorNoise
 from seatrack.geometry import spherical_to_cart, wrap_pi
@@ -25,9 +26,9 @@ DEG = math.pi / 180
 def test_velocity_significance_value_and_broadcast():
     v = np.array([[3.0, 4.0], [1.0, -2.0]])
     var = np.array([[1.0, 4.0], [0.25, 1.0]])
-    d = T.velocity_significance(v, var)
+    d = Hd.velocity_significance(v, var)
     np.testing.assert_allclose(d, [9.0 + 4.0, 4.0 + 4.0])
-    assert T.velocity_significance([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]) == 0.0
+    assert Hd.velocity_significance([0.0, 0.0, 0.0], [1.0, 1.0, 1.0]) == 0.0
 
 
 def test_velocity_significance_is_chi_square_under_zero_velocity():
@@ -36,7 +37,7 @@ def test_velocity_significance_is_chi_square_under_zero_velocity():
     rng = np.random.default_rng(1)
     for n in (2, 3):
         sig = np.array([2.0, 0.5, 3.0])[:n]
-        d = T.velocity_significance(rng.normal(0, sig, (40_000, n)), sig**2)
+        d = Hd.velocity_significance(rng.normal(0, sig, (40_000, n)), sig**2)
         assert abs(d.mean() - n) < 4 * math.sqrt(2 * n / d.size)
         assert abs(d.var() - 2 * n) < 0.1 * 2 * n
 
@@ -45,18 +46,18 @@ def test_velocity_significance_is_chi_square_under_zero_velocity():
 # S2: heading and its variance
 # ---------------------------------------------------------------------------
 def test_heading_convention_and_wrap():
-    assert T.heading([0.0, 5.0]) == pytest.approx(0.0)  # North
-    assert T.heading([5.0, 0.0]) == pytest.approx(math.pi / 2)  # East
-    assert T.heading([-5.0, 0.0]) == pytest.approx(-math.pi / 2)  # West -> wrapped
-    assert T.heading([0.0, -5.0]) == pytest.approx(math.pi)  # South: +pi, in (-pi, pi]
-    b = T.heading(np.array([[1.0, 1.0], [-1.0, -1.0]]))
+    assert Hd.heading([0.0, 5.0]) == pytest.approx(0.0)  # North
+    assert Hd.heading([5.0, 0.0]) == pytest.approx(math.pi / 2)  # East
+    assert Hd.heading([-5.0, 0.0]) == pytest.approx(-math.pi / 2)  # West -> wrapped
+    assert Hd.heading([0.0, -5.0]) == pytest.approx(math.pi)  # South: +pi, in (-pi, pi]
+    b = Hd.heading(np.array([[1.0, 1.0], [-1.0, -1.0]]))
     np.testing.assert_allclose(b, [math.pi / 4, -3 * math.pi / 4])
 
 
 @pytest.mark.parametrize("v", [[120.0, -35.0], [-3.0, -7.5], [0.2, 9.0], [-80.0, 0.1]])
 def test_heading_jacobian_matches_numerical_atan2(v):
-    J = T.heading_jacobian(v)
-    Jn = numerical_jacobian(lambda x: np.array([T.heading(x)]), v, angular=[True])
+    J = Hd.heading_jacobian(v)
+    Jn = numerical_jacobian(lambda x: np.array([Hd.heading(x)]), v, angular=[True])
     np.testing.assert_allclose(J, Jn[0], rtol=1e-6, atol=1e-12)
 
 
@@ -65,38 +66,38 @@ def test_heading_variance_is_spec_formula_and_jacobian_propagation(v):
     vE, vN = v
     var = np.array([4.0, 9.0])
     spec = (vN**2 * var[0] + vE**2 * var[1]) / (vE**2 + vN**2) ** 2
-    assert T.heading_variance(v, var) == pytest.approx(spec, rel=1e-12)
+    assert Hd.heading_variance(v, var) == pytest.approx(spec, rel=1e-12)
     # same thing as J C J^T with J the numerical Jacobian of atan2(vE, vN)
-    Jn = numerical_jacobian(lambda x: np.array([T.heading(x)]), v, angular=[True])
-    assert T.heading_variance(v, var) == pytest.approx((Jn @ np.diag(var) @ Jn.T).item(), rel=1e-6)
+    Jn = numerical_jacobian(lambda x: np.array([Hd.heading(x)]), v, angular=[True])
+    assert Hd.heading_variance(v, var) == pytest.approx((Jn @ np.diag(var) @ Jn.T).item(), rel=1e-6)
     # full covariance: adds the cross term
     C = np.array([[4.0, 3.0], [3.0, 9.0]])
-    assert T.heading_variance(v, C) == pytest.approx((Jn @ C @ Jn.T).item(), rel=1e-6)
+    assert Hd.heading_variance(v, C) == pytest.approx((Jn @ C @ Jn.T).item(), rel=1e-6)
 
 
 def test_heading_variance_matches_monte_carlo_for_small_noise():
     rng = np.random.default_rng(7)
     v = np.array([6.0, -4.0])
     sig = np.array([0.05, 0.08])
-    b = T.heading(v + rng.normal(0, sig, (50_000, 2)))
-    sample = np.var(wrap_pi(b - T.heading(v)))
-    assert sample == pytest.approx(T.heading_variance(v, sig**2), rel=0.03)
+    b = Hd.heading(v + rng.normal(0, sig, (50_000, 2)))
+    sample = np.var(wrap_pi(b - Hd.heading(v)))
+    assert sample == pytest.approx(Hd.heading_variance(v, sig**2), rel=0.03)
 
 
 # ---------------------------------------------------------------------------
 # S2: heading / turn-rate filter
 # ---------------------------------------------------------------------------
 def test_heading_filter_noise_forms():
-    Q = T.heading_filter_noise(2.0, 1e-6)
+    Q = Hd.heading_filter_noise(2.0, 1e-6)
     np.testing.assert_allclose(Q, 1e-6 * np.array([[8 / 3, 2.0], [2.0, 2.0]]))
-    Qd = T.heading_filter_noise(2.0, 1e-6, "diagonal")
+    Qd = Hd.heading_filter_noise(2.0, 1e-6, "diagonal")
     np.testing.assert_allclose(Qd, 1e-6 * np.diag([8 / 3, 2.0]))
     with pytest.raises(ValueError, match="heading_noise"):
-        T.heading_filter_noise(2.0, 1e-6, "other")
+        Hd.heading_filter_noise(2.0, 1e-6, "other")
 
 
 def test_heading_filter_init():
-    s, P = T.heading_filter_init(3.5, 0.01, 0.1)
+    s, P = Hd.heading_filter_init(3.5, 0.01, 0.1)
     np.testing.assert_allclose(s, [3.5 - 2 * math.pi, 0.0])
     np.testing.assert_allclose(P, np.diag([0.01, 0.01]))
 
@@ -106,8 +107,8 @@ def test_heading_filter_step_gains_are_the_spec_ones():
     P = np.array([[0.02, 0.001], [0.001, 0.004]])
     dt, q, var_b = 4.0, 1e-6, 0.005
     F = np.array([[1.0, dt], [0.0, 1.0]])
-    Pp = F @ P @ F.T + T.heading_filter_noise(dt, q)
-    est = T.heading_filter_step(s, P, 0.42, var_b, dt, q)
+    Pp = F @ P @ F.T + Hd.heading_filter_noise(dt, q)
+    est = Hd.heading_filter_step(s, P, 0.42, var_b, dt, q)
     r_b = Pp[0, 0] / (Pp[0, 0] + var_b)
     r_w = Pp[1, 0] / (Pp[0, 0] + var_b)
     np.testing.assert_allclose(est.gain, [r_b, r_w], rtol=1e-12)
@@ -129,10 +130,10 @@ def test_heading_filter_across_the_pi_wrap(start, rate):
     b_true = wrap_pi(start + rate * t)
     b_meas = wrap_pi(b_true + rng.normal(0, math.sqrt(var_b), t.size))
     assert np.abs(np.diff(b_meas)).max() > math.pi  # the measurements really wrap
-    s, P = T.heading_filter_init(b_meas[0], var_b, 0.1)
+    s, P = Hd.heading_filter_init(b_meas[0], var_b, 0.1)
     innov, heads = [], []
     for k in range(1, t.size):
-        est = T.heading_filter_step(s, P, b_meas[k], var_b, dt)
+        est = Hd.heading_filter_step(s, P, b_meas[k], var_b, dt)
         s, P = est.s, est.P
         innov.append(est.innovation)
         heads.append(s[0])
@@ -345,9 +346,9 @@ def test_covariances_stay_symmetric_positive_definite():
 def test_kalman_core_used_for_heading_update():
     """The heading update is the core's angular EKF update (same numbers)."""
     s, P = np.array([3.1, 0.01]), np.diag([0.01, 1e-4])
-    est = T.heading_filter_step(s, P, -3.1, 0.004, 1.0)
+    est = Hd.heading_filter_step(s, P, -3.1, 0.004, 1.0)
     F = np.array([[1.0, 1.0], [0.0, 1.0]])
-    xp, Pp = kalman.predict(s, P, F, T.heading_filter_noise(1.0, 1e-6))
+    xp, Pp = kalman.predict(s, P, F, Hd.heading_filter_noise(1.0, 1e-6))
     u = kalman.extended_update(xp, Pp, [-3.1], [xp[0]], [[1.0, 0.0]], [[0.004]], [True])
     assert est.innovation == pytest.approx(float(u.y[0]))
     assert abs(est.innovation) < 0.2

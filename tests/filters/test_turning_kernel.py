@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from seatrack.filters import heading as Hd
 from seatrack.filters import turning as T
 from seatrack.filters.turning_kernel import turn_logic
 
@@ -18,16 +19,16 @@ def _reference(xs, Ps, ts, cfg, d, v_threshold):
     out = []
     for x, P, t in zip(xs, Ps, ts, strict=True):
         v, var_v = x[d:], np.diag(P)[d:]
-        d_t = float(T.velocity_significance(v, var_v))
+        d_t = float(Hd.velocity_significance(v, var_v))
         d_w, state, gain = math.nan, 0, 1.0
         if d_t > v_threshold:
-            b = float(T.heading(v))
+            b = float(Hd.heading(v))
             cov = P[d : d + 2, d : d + 2] if cfg.heading_cross_covariance else var_v[:2]
-            var_b = float(T.heading_variance(v[:2], cov))
+            var_b = float(Hd.heading_variance(v[:2], cov))
             if hs is None:
-                hs, hP = T.heading_filter_init(b, var_b, cfg.sigma_omega0)
+                hs, hP = Hd.heading_filter_init(b, var_b, cfg.sigma_omega0)
             else:
-                est = T.heading_filter_step(
+                est = Hd.heading_filter_step(
                     hs, hP, b, var_b, t - ht, cfg.q_heading, cfg.heading_noise
                 )
                 hs, hP = est.s, est.P

@@ -179,3 +179,42 @@ def test_render_page_is_one_self_contained_file() -> None:
     m = re.search(r'id="seatrack-data">(.*?)</script>', page, re.S)
     assert m is not None and json.loads(m.group(1)) == json.loads(json.dumps(d))
     assert "sourceMappingURL" not in page
+
+
+def _package_glob_matches(path: str, pattern: str) -> bool:
+    """setuptools package-data semantics: ``*`` within one folder, ``**`` across folders."""
+    import fnmatch
+
+    parts, pats = path.split("/"), pattern.split("/")
+    if "**" in pats:
+        k = pats.index("**")
+        return (
+            len(parts) > k
+            and all(fnmatch.fnmatch(a, b) for a, b in zip(parts[:k], pats[:k], strict=True))
+            and fnmatch.fnmatch(parts[-1], pats[-1])
+        )
+    return len(parts) == len(pats) and all(
+        fnmatch.fnmatch(a, b) for a, b in zip(parts, pats, strict=True)
+    )
+
+
+def test_every_bundled_asset_is_package_data_and_leaflet_is_vendored_with_its_licence():
+    import tomllib
+    from pathlib import Path
+
+    import seatrack
+
+    root = Path(seatrack.__file__).parent
+    pyproject = root.parents[1] / "pyproject.toml"
+    globs = tomllib.loads(pyproject.read_text())["tool"]["setuptools"]["package-data"]["seatrack"]
+    assets = root / "report" / "assets"
+    files = [p.relative_to(root).as_posix() for p in assets.rglob("*") if p.is_file()]
+    files = [f for f in files if "__pycache__" not in f]
+    missing = [f for f in files if not any(_package_glob_matches(f, g) for g in globs)]
+    assert files and not missing
+    leaflet = assets / "vendor" / "leaflet"
+    assert {p.name for p in leaflet.iterdir()} >= {
+        "leaflet.js", "leaflet.css", "layers.png", "layers-2x.png", "LICENSE-leaflet.txt"
+    }  # fmt: skip
+    page = render_page("t", "s", page_data(**_walks(1, 5)))
+    assert "Leaflet 1.9.4" in page and "url(data:image/png;base64," in page

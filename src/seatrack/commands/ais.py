@@ -68,25 +68,6 @@ def tracker_config(
     )
 
 
-def map_tracks(reports: Any, tracks: Any) -> list[Any]:
-    """The map's :class:`~seatrack.report.html.VesselTrack` per vessel from
-    :class:`~seatrack.io.ais.AisReports` and their
-    :class:`~seatrack.filters.ais.AisTracks` (raw and smoothed positions)."""
-    from seatrack.report.html import vessel_tracks
-
-    return vessel_tracks(
-        reports.mmsi,
-        reports.t,
-        reports.lat,
-        reports.lon,
-        tracks.lat,
-        tracks.lon,
-        tracks.segment,
-        tracks.outlier,
-        reports.valid,
-    )
-
-
 def _check_outputs(out: Path, extra: Sequence[Path | None], use_dask: bool) -> None:
     """Check every output path before any work (a bad one fails fast)."""
     from seatrack.commands.options import prepare_outputs
@@ -116,6 +97,8 @@ def run(
     maps: list[Any] = []
 
     def collect(r: Any, tr: Any) -> None:
+        from seatrack.report.html import map_tracks
+
         maps.extend(map_tracks(r, tr))
 
     if use_dask:

@@ -30,6 +30,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from seatrack.information import (
     SingularMatrixError,
+    as_float64,
     check_information,
     fisher_information,
     invert_information,
@@ -46,10 +47,6 @@ __all__ = [
 ]
 
 FloatArray = NDArray[np.float64]
-
-
-def _f(a: ArrayLike) -> FloatArray:
-    return np.asarray(a, dtype=np.float64)
 
 
 def _spd_inverse(M: FloatArray, what: str) -> FloatArray:
@@ -99,13 +96,13 @@ def _per_step(value: Any, K: int, name: str, allow_none: bool = False) -> list[A
     elif isinstance(value, (list, tuple)):
         seq = value
     else:
-        arr = _f(value)
+        arr = as_float64(value)
         if arr.ndim == 2:
             return [arr] * K
         seq = list(arr)
     if len(seq) != K:
         raise ValueError(f"{name} has {len(seq)} entries, expected {K}")
-    return [None if v is None else _f(v) for v in seq]
+    return [None if v is None else as_float64(v) for v in seq]
 
 
 def _seq_len(value: Any) -> int | None:
@@ -178,7 +175,7 @@ def pcrb_linear(
     ndarray, shape (K + 1, n, n)
         Bound covariances ``J_k^-1`` for ``k = 0..K``.
     """
-    P0m = _f(P0)
+    P0m = as_float64(P0)
     K = _n_steps(n_steps, (F, Q), (H, R), int(measure_first))
     Fs = _per_step(F, K, "F")
     Qs = _per_step(Q, K, "Q")
@@ -246,7 +243,7 @@ def pcrb(
     ndarray, shape (K + 1, n, n)
         Bound covariances ``J_k^-1``.
     """
-    X = _f(truth)
+    X = as_float64(truth)
     if X.ndim == 2:
         X = X[None]
     runs, K1, n = X.shape
@@ -266,14 +263,14 @@ def pcrb(
             Hk = measurement_jacobian(X[r, k], k)
             if Hk is None:
                 continue
-            info = _measurement_info(_f(Hk), Rs[k])
+            info = _measurement_info(as_float64(Hk), Rs[k])
             assert info is not None
             acc += info
             seen = True
         return acc / runs if seen else None
 
     out = np.empty((K + 1, n, n))
-    J = _spd_inverse(_f(P0), "prior covariance P0")
+    J = _spd_inverse(as_float64(P0), "prior covariance P0")
     if measure_first:
         i0 = expected_info(0)
         if i0 is not None:
@@ -289,7 +286,7 @@ def pcrb(
             D11 = np.zeros((n, n))
             EF = np.zeros((n, n))
             for r in range(runs):
-                Fk = _f(transition_jacobian(X[r, k], k))
+                Fk = as_float64(transition_jacobian(X[r, k], k))
                 D11 += Fk.T @ Qi @ Fk
                 EF += Fk
             D11 /= runs

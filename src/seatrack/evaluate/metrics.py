@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import stats
 
-from seatrack.information import SingularMatrixError, positive_definite_mask
+from seatrack.information import SingularMatrixError, as_float64, positive_definite_mask
 
 __all__ = [
     "rmse",
@@ -43,10 +43,6 @@ __all__ = [
 FloatArray = NDArray[np.float64]
 
 
-def _f(a: ArrayLike) -> FloatArray:
-    return np.asarray(a, dtype=np.float64)
-
-
 def rmse(err: ArrayLike, axis: int | tuple[int, ...] | None = 0) -> Any:
     """Root-mean-square of ``err`` along ``axis``.
 
@@ -63,13 +59,13 @@ def rmse(err: ArrayLike, axis: int | tuple[int, ...] | None = 0) -> Any:
     ndarray or float
         ``sqrt(mean(err**2, axis))``; NaN entries are ignored (missed updates).
     """
-    e = _f(err)
+    e = as_float64(err)
     return np.sqrt(np.nanmean(e * e, axis=axis))
 
 
 def error_norm(err: ArrayLike) -> FloatArray:
     """Euclidean norm of error vectors along the last axis: shape ``(..., n) -> (...)``."""
-    e = _f(err)
+    e = as_float64(err)
     return np.sqrt(np.sum(e * e, axis=-1))
 
 
@@ -88,13 +84,13 @@ def position_error(estimate: ArrayLike, truth: ArrayLike, dims: int = 2) -> Floa
     ndarray, shape (...)
         ``|p_est - p_true|`` in metres.
     """
-    d = _f(estimate)[..., :dims] - _f(truth)[..., :dims]
+    d = as_float64(estimate)[..., :dims] - as_float64(truth)[..., :dims]
     return error_norm(d)
 
 
 def velocity_error(estimate: ArrayLike, truth: ArrayLike, dims: int = 2) -> FloatArray:
     """Euclidean velocity error (m/s) of states laid out ``[pos(dims), vel(dims), ...]``."""
-    d = _f(estimate)[..., dims : 2 * dims] - _f(truth)[..., dims : 2 * dims]
+    d = as_float64(estimate)[..., dims : 2 * dims] - as_float64(truth)[..., dims : 2 * dims]
     return error_norm(d)
 
 
@@ -113,13 +109,13 @@ def rms_over_time(err_norm: ArrayLike, skip: int = 0) -> float:
     float
         ``sqrt(mean(err_norm[..., skip:]**2))`` over runs and steps, NaN ignored.
     """
-    e = _f(err_norm)[..., skip:]
+    e = as_float64(err_norm)[..., skip:]
     return float(np.sqrt(np.nanmean(e * e)))
 
 
 def peak_error(err_norm: ArrayLike, skip: int = 0) -> float:
     """Largest error magnitude after ``skip`` initial steps (NaN ignored)."""
-    e = np.abs(_f(err_norm)[..., skip:])
+    e = np.abs(as_float64(err_norm)[..., skip:])
     return float(np.nanmax(e))
 
 
@@ -172,7 +168,7 @@ def nees(err: ArrayLike, P: ArrayLike) -> Any:
     ndarray, shape (...)
         NEES; chi-square with ``n`` dof for a consistent estimator.
     """
-    return _quadratic_form(_f(err), _f(P))
+    return _quadratic_form(as_float64(err), as_float64(P))
 
 
 def nis(y: ArrayLike, S: ArrayLike) -> Any:
@@ -185,7 +181,7 @@ def nis(y: ArrayLike, S: ArrayLike) -> Any:
     S : array_like, shape (..., m, m)
         Innovation covariance.
     """
-    return _quadratic_form(_f(y), _f(S))
+    return _quadratic_form(as_float64(y), as_float64(S))
 
 
 def anees(err: ArrayLike, P: ArrayLike, axis: int | None = 0) -> Any:
@@ -244,7 +240,7 @@ def chi2_interval(dof: int, n_runs: int, alpha: float = 0.05) -> tuple[float, fl
 
 def fraction_inside(values: ArrayLike, lo: float, hi: float) -> float:
     """Fraction of finite ``values`` inside ``[lo, hi]`` (e.g. ANEES over time vs bounds)."""
-    v = _f(values)
+    v = as_float64(values)
     v = v[np.isfinite(v)]
     if v.size == 0:
         return float("nan")

@@ -69,20 +69,15 @@ __all__ = [
     "wrap_angles",
     "run_tracks",
     "COMMON_COLUMNS",
+    "CartesianState",
+    "STATE_COLUMNS",
 ]
 
+#: Cartesian position and velocity columns (m, m/s): named alike in track outputs and
+#: truth files (``seatrack.simulate.files.TRUTH_COLUMNS``) so that they can be compared
+STATE_COLUMNS = ("x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps")
 #: the columns every method writes, in this order (z columns NaN -- empty -- for 2-D plots)
-COMMON_COLUMNS = (
-    "x_m",
-    "y_m",
-    "z_m",
-    "vx_mps",
-    "vy_mps",
-    "vz_mps",
-    "std_x_m",
-    "std_y_m",
-    "std_z_m",
-)
+COMMON_COLUMNS = (*STATE_COLUMNS, "std_x_m", "std_y_m", "std_z_m")
 
 
 class PlotStatus(IntEnum):
@@ -392,6 +387,17 @@ def cartesian_names(d: int) -> tuple[str, ...]:
     """``x, y, [z], vx, vy, [vz]``: the first components of every filter's state."""
     axes = ("x", "y", "z")[:d]
     return axes + tuple("v" + a for a in axes)
+
+
+class CartesianState:
+    """Base of the filters whose state is Cartesian position and velocity on ``d`` axes
+    (:func:`cartesian_names`)."""
+
+    d: int
+
+    @property
+    def state_names(self) -> tuple[str, ...]:
+        return cartesian_names(self.d)
 
 
 def converted_positions(

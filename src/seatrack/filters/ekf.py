@@ -18,10 +18,10 @@ from numpy.typing import ArrayLike, NDArray
 from seatrack import kalman
 from seatrack.config import param
 from seatrack.filters.base import (
+    CartesianState,
     Plots,
     SensorNoise,
     TrackState,
-    cartesian_names,
     common_columns,
     finish_update,
     measurement_model,
@@ -67,7 +67,7 @@ class EKFConfig:
         return cls(q=0.0, sigma_accel=target.accel_typical, initial_speed_sigma=target.speed_max)
 
 
-class EKF:
+class EKF(CartesianState):
     """Constant-velocity extended Kalman filter on polar plots (the reference filter).
 
     State ``[x, y, (z), vx, vy, (vz)]`` (m, m/s); continuous white-noise acceleration with
@@ -101,10 +101,6 @@ class EKF:
         self.model = measurement_model(d, 2 * d, self.range_rate)
         self.R = measurement_noise(self.sensor, d, self.range_rate)
         self._angular = self.model.angular.astype(float)
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        return cartesian_names(self.d)
 
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
         xx = np.asarray(x, dtype=float)

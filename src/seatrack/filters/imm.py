@@ -38,7 +38,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
-from numba import guvectorize
+from numba import guvectorize, njit
 from numpy.typing import ArrayLike, NDArray
 
 from seatrack import kalman
@@ -66,6 +66,7 @@ __all__ = [
     "IMMState",
     "IMMStep",
     "mix",
+    "markov_predict_core",
     "combine",
     "check_transition",
     "CVCTIMM",
@@ -117,6 +118,18 @@ class IMMStep:
     nis: FloatArray
 
 
+@njit(cache=True)
+def markov_predict_core(PI, mu, out):  # pragma: no cover - compiled
+    """Model probabilities one step ahead, ``out[j] = sum_i PI[i, j] mu[i]``, for the
+    Markov chain ``PI[i, j] = P(model j at k | model i at k-1)`` (rows sum to one; a
+    column-stochastic matrix is passed transposed)."""
+    for j in range(out.shape[0]):
+        s = 0.0
+        for i in range(mu.shape[0]):
+            s += PI[i, j] * mu[i]
+        out[j] = s
+
+
 @guvectorize(
     ["void(f8[:,:], f8[:,:,:], f8[:], f8[:,:], f8[:,:], f8[:,:], f8[:,:,:], f8[:])"],
     "(M,n),(M,n,n),(M),(M,M),(M,n)->(M,n),(M,n,n),(M)",
@@ -126,11 +139,9 @@ class IMMStep:
 def _mix_kernel(X, P, mu, PI, valid, X0, P0, c):  # pragma: no cover - compiled
     """Mixing (BLK 11.6.6 steps 1-2) with model-own augmentation of missing components."""
     M, n = X.shape
+    markov_predict_core(PI, mu, c)
     for j in range(M):
-        cj = 0.0
-        for i in range(M):
-            cj += PI[i, j] * mu[i]
-        c[j] = cj
+        cj = c[j]
         for a in range(n):
             X0[j, a] = 0.0
             for b in range(n):

@@ -61,12 +61,12 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.special import gammaln
 
 from seatrack import kalman
-from seatrack.config import param
+from seatrack.config import param, redefault
 from seatrack.filters.base import (
+    CartesianState,
     Plots,
     SensorNoise,
     TrackState,
-    cartesian_names,
     common_columns,
     finish_update,
     measurement_noise,
@@ -84,7 +84,7 @@ from seatrack.filters.robust_baselines import (
     huber_update,
     student_t_update,
 )
-from seatrack.kalman import cholesky_core, forward_core
+from seatrack.kalman import cholesky_core, forward_core, matmul_core
 from seatrack.models.measurement import polar_measurement
 from seatrack.models.motion import cv_matrices
 from seatrack.models.targets import TargetClass
@@ -220,15 +220,8 @@ class ContaminatedConfig(OutlierConfig, LevelConfig):
     prior ``epsilon = 0.1`` per channel, learnt over about 30 scans: chosen on the tuning
     seeds of ``benchmarks/defaults.py`` among a fixed 0.1 and memories of 30 and 100)."""
 
-    outlier_probability: float = param(
-        0.1, doc="prior probability that a plot channel is an outlier (0: Gaussian)", min=0,
-        max=0.5,
-    )  # fmt: skip
-    outlier_memory: float = param(
-        30.0, key="outlier_memory_scans",
-        doc="learn each channel's outlier probability over about this many scans (0: fixed)",
-        min=0,
-    )  # fmt: skip
+    outlier_probability: float = redefault(OutlierConfig, "outlier_probability", 0.1)
+    outlier_memory: float = redefault(OutlierConfig, "outlier_memory", 30.0)
     use_range_rate: bool = param(True, doc="use the plots' range rate when they have one")
 
 
@@ -329,18 +322,8 @@ def _mixture_core(P, y, H, r, G, logp, k, dx, Po, ll, pout):  # pragma: no cover
     W = np.empty((m, m))
     PW = np.empty((n, m))
     for i in range(N):
-        for a in range(n):
-            for c in range(m):
-                v = 0.0
-                for b in range(n):
-                    v += P[i, a, b] * H[i, c, b]
-                PHt[a, c] = v
-        for a in range(m):
-            for c in range(m):
-                v = 0.0
-                for b in range(n):
-                    v += H[i, a, b] * PHt[b, c]
-                HPH[a, c] = v
+        matmul_core(P[i], H[i].T, PHt)
+        matmul_core(H[i], PHt, HPH)
         bad = False
         for g in range(C):
             for a in range(m):
@@ -399,11 +382,7 @@ def _mixture_core(P, y, H, r, G, logp, k, dx, Po, ll, pout):  # pragma: no cover
             for c in range(m):
                 v += PHt[a, c] * ub[c]
             dx[i, a] = v
-            for c in range(m):
-                v = 0.0
-                for b in range(m):
-                    v += PHt[a, b] * W[b, c]
-                PW[a, c] = v
+        matmul_core(PHt, W, PW)
         for a in range(n):
             for b in range(a, n):
                 v = P[i, a, b]
@@ -482,7 +461,7 @@ class _Updated:
     outlier: FloatArray
 
 
-class LevelIMM:
+class LevelIMM(CartesianState):
     """IMM of constant-velocity EKFs with process-noise levels (Gaussian plots).
 
     ``TrackState.x``/``P``: the combined estimate ``[x, y, (z), vx, vy, (vz)]``; ``aux``:
@@ -525,10 +504,6 @@ class LevelIMM:
 
     def _rule_setup(self) -> None:
         """Constants of the update rule (subclasses)."""
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        return cartesian_names(self.d)
 
     # -- contract ------------------------------------------------------------------
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:

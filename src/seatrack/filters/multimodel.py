@@ -63,10 +63,10 @@ from numpy.typing import ArrayLike, NDArray
 
 from seatrack.config import param
 from seatrack.filters.base import (
+    CartesianState,
     Plots,
     SensorNoise,
     TrackState,
-    cartesian_names,
     common_columns,
     conversion_param,
     converted_positions,
@@ -77,6 +77,7 @@ from seatrack.filters.base import (
 )
 from seatrack.filters.multimodel_kernel import step_kernel
 from seatrack.geometry import G0
+from seatrack.information import as_float64
 from seatrack.models.targets import TargetClass
 
 FloatArray = NDArray[np.float64]
@@ -327,10 +328,6 @@ def range_rate_row(
 # ---------------------------------------------------------------------------
 # Filter object (thin shell)
 # ---------------------------------------------------------------------------
-def _f(a: ArrayLike) -> FloatArray:
-    return np.asarray(a, dtype=np.float64)
-
-
 class MultiModelFilter:
     """The patent's multiple-model filter (spec ``multimodel.md``, steps 1-11).
 
@@ -366,16 +363,16 @@ class MultiModelFilter:
         Position ``z`` with covariance ``R``; velocity ``velocity`` (default 0) with
         standard deviation ``velocity_std`` (m/s) per axis; reliabilities the prior.
         """
-        zz = _f(z)
+        zz = as_float64(z)
         lead = zz.shape[:-1]
         d = self.d
         x = np.zeros(lead + (self.n,))
         x[..., :d] = zz
         if velocity is not None:
-            x[..., d:] = _f(velocity)
+            x[..., d:] = as_float64(velocity)
         P = np.zeros(lead + (self.n, self.n))
-        P[..., :d, :d] = _f(R)
-        vs = np.broadcast_to(_f(velocity_std), lead + (d,))
+        P[..., :d, :d] = as_float64(R)
+        vs = np.broadcast_to(as_float64(velocity_std), lead + (d,))
         idx = np.arange(d, self.n)
         P[..., idx, idx] = vs**2
         beta = np.broadcast_to(self.config.prior_vector(), lead + (self.config.n_models,)).copy()
@@ -404,8 +401,8 @@ class MultiModelFilter:
         """
         d = self.d
         rho = np.nan if range_rate is None else range_rate
-        sp = np.zeros(d) if sensor is None else _f(sensor)[..., :d]
-        sv = np.zeros(d) if sensor_vel is None else _f(sensor_vel)[..., :d]
+        sp = np.zeros(d) if sensor is None else as_float64(sensor)[..., :d]
+        sv = np.zeros(d) if sensor_vel is None else as_float64(sensor_vel)[..., :d]
         out = step_kernel(
             state.x,
             state.P,
@@ -447,9 +444,9 @@ class MultiModelFilter:
         velocity_std : float -- initial velocity standard deviation (one-point start).
         initial : state at ``t[..., 0]``; default a one-point start on the first plot.
         """
-        tt = _f(t)
-        zz = _f(z)
-        RR = _f(R)
+        tt = as_float64(t)
+        zz = as_float64(z)
+        RR = as_float64(R)
         K = zz.shape[-2]
         if tt.shape[-1] != K:
             raise ValueError(f"t has {tt.shape[-1]} scans, z has {K}")
@@ -469,9 +466,9 @@ class MultiModelFilter:
         lls = np.full(lead + (K,), np.nan)
         nis = np.full(lead + (K,), np.nan)
         xs[..., 0, :], Ps[..., 0, :, :], bs[..., 0, :] = st.x, st.P, st.beta
-        rr = None if range_rate is None else _f(range_rate)
-        sp = None if sensor is None else _f(sensor)
-        sv = None if sensor_vel is None else _f(sensor_vel)
+        rr = None if range_rate is None else as_float64(range_rate)
+        sp = None if sensor is None else as_float64(sensor)
+        sv = None if sensor_vel is None else as_float64(sensor_vel)
         for k in range(1, K):
             res = self.step(
                 st,
@@ -539,7 +536,7 @@ class MultiModelRangeRateConfig(MultiModelTrackConfig):
     )
 
 
-class MultiModel:
+class MultiModel(CartesianState):
     """The multiple-model filter on the filter contract (``--method mm``).
 
     ``TrackState.x``/``P`` hold the integrated estimate: after :meth:`predict` the
@@ -580,10 +577,6 @@ class MultiModel:
             ),
             d=d,
         )
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        return cartesian_names(self.d)
 
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
         xx = np.asarray(x, dtype=float)

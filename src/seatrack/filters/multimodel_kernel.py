@@ -12,7 +12,14 @@ import math
 import numpy as np
 from numba import guvectorize, njit
 
-from seatrack.kalman import cholesky_core, forward_core, update_core
+from seatrack.filters.imm import markov_predict_core
+from seatrack.kalman import (
+    cholesky_core,
+    forward_core,
+    matmul_core,
+    sym_matmul_core,
+    update_core,
+)
 
 __all__ = ["step_kernel", "mahalanobis"]
 
@@ -79,11 +86,7 @@ def _integrated_prediction(xc, Pb, beta, pi, alphas, gam, integ, bm, xp, Pp):  #
     """Step 4 prior ``bm = pi beta`` and steps 10-11: integrated prediction ``xp``, ``Pp``."""
     n = xc.shape[0]
     N, d = alphas.shape
-    for a in range(N):
-        s = 0.0
-        for b in range(N):
-            s += pi[a, b] * beta[b]
-        bm[a] = s
+    markov_predict_core(pi.T, beta, bm)  # pi is column-stochastic
     um = np.empty(d)
     Cm = np.empty((d, d))
     _spread(bm, alphas, um, Cm)
@@ -189,20 +192,8 @@ def _common_update(xc, Pb, Z, R, bo, alphas, gam, T2, integ, xo, Po):  # pragma:
     if integ == 0.0:
         return
     GC = np.empty((n, d))
-    for i in range(n):
-        for j in range(d):
-            s = 0.0
-            for k in range(d):
-                s += G[i, k] * C[k, j]
-            GC[i, j] = s
-    for i in range(n):
-        for j in range(i, n):
-            s = 0.0
-            for k in range(d):
-                s += GC[i, k] * G[j, k]
-            v = Po[i, j] + s
-            Po[i, j] = v
-            Po[j, i] = v
+    matmul_core(G, C, GC)
+    sym_matmul_core(GC, G.T, Po, Po)  # Po += G C G^T (Po exactly symmetric)
 
 
 @njit(cache=True)

@@ -9,9 +9,10 @@ are plain arithmetic broadcast over leading dimensions):
 
 * S1 :func:`ekf_step` -- CV-EKF predict + update on one plot (``seatrack.kalman``,
   ``seatrack.models``); :func:`initial_state` starts it from the first plot.
-* S2 :func:`velocity_significance` (``d_t``), :func:`heading`, :func:`heading_variance`,
-  :func:`heading_filter_init` / :func:`heading_filter_step` (the (b, omega) filter with
-  the wrapped heading innovation; :mod:`seatrack.filters.heading`).
+* S2 in :mod:`seatrack.filters.heading` (pure reference functions; compiled in
+  :mod:`seatrack.filters.turning_kernel`): ``velocity_significance`` (``d_t``),
+  ``heading``, ``heading_variance``, ``heading_filter_init`` / ``heading_filter_step``
+  (the (b, omega) filter with the wrapped heading innovation).
 * S3 :func:`turn_rate_significance` (``d_omega``) and :func:`push_turn_rate` (FIFO queue).
 * S4 :func:`fuzzy_vote` (rising / falling count vote with the ``delta_omega`` threshold).
 * S5 :func:`noise_gain` ``c(delta_omega)``; the gain applies to the next prediction only
@@ -47,11 +48,11 @@ from numpy.typing import ArrayLike, NDArray
 from seatrack import kalman
 from seatrack.config import param
 from seatrack.filters.base import (
+    CartesianState,
     Plots,
     PlotStatus,
     SensorNoise,
     TrackState,
-    cartesian_names,
     common_columns,
     finish_update,
     plot_gaussian,
@@ -60,16 +61,6 @@ from seatrack.filters.base import (
     step_times,
     usable,
     wrap_angles,
-)
-from seatrack.filters.heading import (
-    HeadingEstimate,
-    heading,
-    heading_filter_init,
-    heading_filter_noise,
-    heading_filter_step,
-    heading_jacobian,
-    heading_variance,
-    velocity_significance,
 )
 from seatrack.filters.turning_kernel import turn_logic
 from seatrack.geometry import bearing
@@ -83,20 +74,12 @@ FloatArray = NDArray[np.float64]
 __all__ = [
     "TurnState",
     "TurningConfig",
-    "HeadingEstimate",
     "TurningStep",
     "TurningTrack",
     "TurningFilter",
     "Turning",
     "initial_state",
     "ekf_step",
-    "velocity_significance",
-    "heading",
-    "heading_jacobian",
-    "heading_variance",
-    "heading_filter_noise",
-    "heading_filter_init",
-    "heading_filter_step",
     "turn_rate_significance",
     "push_turn_rate",
     "fuzzy_vote",
@@ -479,7 +462,7 @@ class TurningTrack:
 # ---------------------------------------------------------------------------
 # The filter on the contract (batched), and the one-track shell
 # ---------------------------------------------------------------------------
-class Turning:
+class Turning(CartesianState):
     """The turning-target filter (spec S1-S6) on the filter contract, for a batch of tracks.
 
     ``TrackState.x``/``P``: the CV-EKF state ``[x, y, (z), vx, vy, (vz)]``. ``aux``: the
@@ -508,10 +491,6 @@ class Turning:
         self.R = plot_covariance(sn.sigma_range, sn.sigma_azimuth, sn.sigma_elevation, d)
         self._angular = self.model.angular.astype(float)
         self.v_threshold = float(d) if c.velocity_threshold is None else c.velocity_threshold
-
-    @property
-    def state_names(self) -> tuple[str, ...]:
-        return cartesian_names(self.d)
 
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
         st = TrackState.new(t, x, P)

@@ -336,8 +336,22 @@ class MotionModel(Protocol):
         ...
 
 
+class _PositionVelocityLayout:
+    """The state layout of every model here: position ``[0, d)``, velocity ``[d, 2d)``."""
+
+    d: int
+
+    @property
+    def position_index(self) -> tuple[int, ...]:
+        return tuple(range(self.d))
+
+    @property
+    def velocity_index(self) -> tuple[int, ...]:
+        return tuple(range(self.d, 2 * self.d))
+
+
 @dataclass(frozen=True)
-class _Polynomial:
+class _Polynomial(_PositionVelocityLayout):
     """Shared shell of the linear polynomial models (CV: order 1, CA: order 2)."""
 
     q: float = 0.1
@@ -350,14 +364,6 @@ class _Polynomial:
     @property
     def ndim_state(self) -> int:
         return (self._order + 1) * self.d
-
-    @property
-    def position_index(self) -> tuple[int, ...]:
-        return tuple(range(self.d))
-
-    @property
-    def velocity_index(self) -> tuple[int, ...]:
-        return tuple(range(self.d, 2 * self.d))
 
     @property
     def state_names(self) -> tuple[str, ...]:
@@ -405,7 +411,7 @@ class ConstantAcceleration(_Polynomial):
 
 
 @dataclass(frozen=True)
-class CoordinatedTurn:
+class CoordinatedTurn(_PositionVelocityLayout):
     """Coordinated turn with the turn rate in the state (clockwise positive).
 
     Parameters
@@ -431,14 +437,6 @@ class CoordinatedTurn:
     @property
     def ndim_state(self) -> int:
         return 2 * self.d + 1
-
-    @property
-    def position_index(self) -> tuple[int, ...]:
-        return tuple(range(self.d))
-
-    @property
-    def velocity_index(self) -> tuple[int, ...]:
-        return tuple(range(self.d, 2 * self.d))
 
     @property
     def state_names(self) -> tuple[str, ...]:

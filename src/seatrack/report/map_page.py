@@ -324,19 +324,28 @@ def _tiles(o: MapOptions) -> dict[str, Any] | None:
     }
 
 
+#: the vendored third-party files (unmodified Leaflet, see ``assets/README.md``)
+_LEAFLET = ("vendor", "leaflet")
+
+
+def _asset_file(*parts: str) -> Any:
+    """The bundled file ``assets/<parts...>`` (an importlib resource)."""
+    return resources.files("seatrack.report").joinpath("assets", *parts)
+
+
 @lru_cache(maxsize=8)
-def _asset(name: str) -> str:
-    return (resources.files("seatrack.report") / "assets" / name).read_text(encoding="utf-8")
+def _asset(*parts: str) -> str:
+    return str(_asset_file(*parts).read_text(encoding="utf-8"))
 
 
 @lru_cache(maxsize=1)
 def _leaflet() -> tuple[str, str]:
     """Leaflet's script (without its source-map comment) and its style with the layer
     control's icons as data URIs."""
-    js = _asset("leaflet.js").replace("//# sourceMappingURL=leaflet.js.map", "")
-    css = _asset("leaflet.css")
+    js = _asset(*_LEAFLET, "leaflet.js").replace("//# sourceMappingURL=leaflet.js.map", "")
+    css = _asset(*_LEAFLET, "leaflet.css")
     for name in ("layers.png", "layers-2x.png"):
-        png = (resources.files("seatrack.report") / "assets" / name).read_bytes()
+        png = _asset_file(*_LEAFLET, name).read_bytes()
         css = css.replace(
             f"url(images/{name})", f"url(data:image/png;base64,{b64encode(png).decode()})"
         )

@@ -26,6 +26,15 @@ def _figure(size: tuple[float, float]) -> Any:
     return fig
 
 
+def _finish(fig: Any, ax: Any, title: str) -> Any:
+    """Grid, legend and title (when given) of a one-panel figure; returns ``fig``."""
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="best", fontsize=8)
+    if title:
+        ax.set_title(title)
+    return fig
+
+
 def _xy(a: ArrayLike) -> np.ndarray:
     v = np.asarray(a, dtype=float)
     return v[..., :2] / 1000.0
@@ -105,11 +114,7 @@ def track_figure(
     ax.set_xlabel("East (km)")
     ax.set_ylabel("North (km)")
     ax.set_aspect("equal", adjustable="box")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
-    if title:
-        ax.set_title(title)
-    return fig
+    return _finish(fig, ax, title)
 
 
 def error_figure(
@@ -168,11 +173,7 @@ def error_figure(
         ax.set_yscale("log")
         ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
         ax.yaxis.set_minor_formatter(FuncFormatter(minor))
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
-    if title:
-        ax.set_title(title)
-    return fig
+    return _finish(fig, ax, title)
 
 
 def situation_figure(
@@ -241,11 +242,7 @@ def ais_figure(reports: Any, tracks: Any, title: str = "") -> Any:
             label=f"outliers ({int(out.sum())})")  # fmt: skip
     ax.set_xlabel("longitude (deg)")
     ax.set_ylabel("latitude (deg)")
-    ax.grid(True, alpha=0.3)
-    ax.legend(loc="best", fontsize=8)
-    if title:
-        ax.set_title(title)
-    return fig
+    return _finish(fig, ax, title)
 
 
 def save(fig: Any, path: str | Path, dpi: int = 110) -> Path:

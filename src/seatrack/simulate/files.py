@@ -21,7 +21,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.filters.base import Plots
+from seatrack.filters.base import STATE_COLUMNS, Plots
 from seatrack.geometry import bearing_rad_to_deg
 from seatrack.io.atomic import atomic_write
 from seatrack.io.table import (
@@ -49,18 +49,7 @@ __all__ = [
 ]
 
 BEARING_COLUMNS = ("contact", "time_s", "bearing_deg", "observer_x_m", "observer_y_m", "sigma_deg")
-TRUTH_COLUMNS = (
-    "time_s",
-    "x_m",
-    "y_m",
-    "z_m",
-    "vx_mps",
-    "vy_mps",
-    "vz_mps",
-    "course_deg",
-    "speed_mps",
-    "turn_rate_dps",
-)
+TRUTH_COLUMNS = ("time_s", *STATE_COLUMNS, "course_deg", "speed_mps", "turn_rate_dps")
 
 
 #: largest speed (m/s) accepted in a truth file (about 20,000 kn)

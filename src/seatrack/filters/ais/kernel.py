@@ -29,7 +29,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 from numba import njit, prange
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
 from seatrack.filters.ais.config import NX, AisTrackerConfig
 from seatrack.filters.ais.ct import constrain, constrain_rows, ct_f_jac, ct_q, sogcog, update2
@@ -50,6 +50,11 @@ __all__ = [
     "run_kernel",
     "vessel_chunks",
     "vessel_layout",
+    "thread_chunks",
+    "vessel_index",
+    "take_rows",
+    "largest_vessel",
+    "vessel_rows",
     "vessel_starts",
 ]
 
@@ -627,11 +632,49 @@ def vessel_starts(vessel: NDArray[np.int64]) -> NDArray[np.int64]:
     return np.flatnonzero(np.r_[True, vs[1:] != vs[:-1], True]).astype(np.int64)
 
 
+@njit(cache=True, nogil=True)
+def largest_vessel(starts, chunks, c):  # pragma: no cover - compiled
+    """Rows of the largest vessel of chunk ``c`` (at least 1): the size of its work arrays."""
+    size = 1
+    for v in range(chunks[c], chunks[c + 1]):
+        size = max(size, starts[v + 1] - starts[v])
+    return size
+
+
+def thread_chunks(starts: NDArray[np.int64]) -> NDArray[np.int64]:
+    """The chunks of vessels that the compiled stages run on numba's threads
+    (:func:`vessel_chunks`, 8 per thread)."""
+    return vessel_chunks(starts, 8 * numba.get_num_threads())
+
+
 def vessel_layout(vessel: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.int64]]:
-    """Vessel boundaries (:func:`vessel_starts`) and the chunks of vessels that the compiled
-    stages run on numba's threads (:func:`vessel_chunks`, 8 per thread)."""
+    """Vessel boundaries (:func:`vessel_starts`) and their :func:`thread_chunks`."""
     starts = vessel_starts(vessel)
-    return starts, vessel_chunks(starts, 8 * numba.get_num_threads())
+    return starts, thread_chunks(starts)
+
+
+def vessel_index(starts: NDArray[np.int64]) -> NDArray[np.int64]:
+    """Index of each row's vessel, ``(N,)``, from the boundaries ``starts``."""
+    return np.repeat(np.arange(starts.size - 1), np.diff(starts))
+
+
+def take_rows(inp: KernelInputs, rows: NDArray[np.bool_] | None, **new: NDArray) -> KernelInputs:
+    """The rows ``rows`` of ``inp`` (whole vessels; None: all, not copied), with per-row
+    fields replaced by ``new`` (full length); ``starts`` follows."""
+    if rows is None:
+        return inp._replace(**new)
+    kept = {f: new.get(f, getattr(inp, f))[rows] for f in KernelInputs._fields[1:]}
+    return KernelInputs(vessel_starts(vessel_index(inp.starts)[rows]), **kept)
+
+
+def vessel_rows(
+    vessel: NDArray[np.int64], t: ArrayLike, xy: ArrayLike, mask: ArrayLike
+) -> tuple[NDArray[np.int64], NDArray[np.int64], FloatArray, FloatArray, NDArray[np.bool_]]:
+    """:func:`vessel_layout` and the rows' times (s), positions (m) and mask as the
+    contiguous float64 / bool arrays the compiled vessel stages read."""
+    starts, chunks = vessel_layout(vessel)
+    c = np.ascontiguousarray
+    return starts, chunks, c(t, np.float64), c(xy, np.float64), c(mask, np.bool_)
 
 
 def run_kernel(inp: KernelInputs, cfg: AisTrackerConfig) -> KernelOutputs:
@@ -649,7 +692,7 @@ def run_kernel(inp: KernelInputs, cfg: AisTrackerConfig) -> KernelOutputs:
     c = np.ascontiguousarray
     args = KernelInputs._make(c(a) for a in inp)
     par = kernel_params(cfg)
-    chunks = vessel_chunks(args.starts, 8 * numba.get_num_threads())
+    chunks = thread_chunks(args.starts)
     _track_kernel(args, par, out, chunks)
     # the smoother can step outside the physical limits the filter keeps: project again
     constrain_rows(out.state, par.vmax, par.amax, par.w_max)

@@ -9,7 +9,7 @@ from numba import njit, prange
 from numpy.typing import NDArray
 
 from seatrack.filters.ais.config import CHI2_1_MEDIAN, AisTrackerConfig, trim_scale
-from seatrack.filters.ais.kernel import vessel_layout
+from seatrack.filters.ais.kernel import largest_vessel, vessel_rows
 
 FloatArray = NDArray[np.float64]
 
@@ -67,17 +67,7 @@ def position_noise(
     out = np.empty((n, 2))
     if n == 0:
         return out
-    starts, chunks = vessel_layout(vessel)
-    c = np.ascontiguousarray
-    _noise_kernel(
-        starts,
-        chunks,
-        c(t, dtype=np.float64),
-        c(xy, dtype=np.float64),
-        c(use, dtype=np.bool_),
-        _noise_params(config),
-        out,
-    )
+    _noise_kernel(*vessel_rows(vessel, t, xy, use), _noise_params(config), out)
     return out
 
 
@@ -176,9 +166,7 @@ def _noise_vessel(a, b, t, xy, use, par, xc, xa, xi, out):  # pragma: no cover -
 def _noise_kernel(starts, chunks, t, xy, use, par, out):  # pragma: no cover - compiled
     """:func:`_noise_vessel` of every vessel, chunk by chunk on all threads."""
     for c in prange(chunks.size - 1):
-        size = 1
-        for v in range(chunks[c], chunks[c + 1]):
-            size = max(size, starts[v + 1] - starts[v])
+        size = largest_vessel(starts, chunks, c)
         xc, xa, xi = np.empty(size), np.empty(size), np.empty(size)
         for v in range(chunks[c], chunks[c + 1]):
             _noise_vessel(starts[v], starts[v + 1], t, xy, use, par, xc, xa, xi, out)

@@ -9,7 +9,6 @@ rejected, and the vessels concerned are filtered again (:func:`revisit`).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
 
 import numpy as np
 from numba import njit, prange
@@ -21,64 +20,17 @@ from seatrack.filters.ais.kernel import (
     KernelInputs,
     KernelOutputs,
     OutlierKind,
+    largest_vessel,
     run_kernel,
-    vessel_layout,
-    vessel_starts,
+    take_rows,
+    thread_chunks,
+    vessel_rows,
 )
 from seatrack.geometry import KNOT_MPS
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["Rows", "neighbour_plausibility", "revisit", "merge_outputs", "run_rows"]
-
-
-@dataclass(frozen=True)
-class Rows:
-    """The kernel's inputs with the vessel id of each row, rows sorted by (vessel, time):
-    time (s), position (m), use, SOG/COG velocity (m/s, zero where unknown) and whether
-    known, SOG (m/s), COG (rad), report noise ``(sigma_pos, sigma_time)``, decisions
-    ``force`` (:class:`~seatrack.filters.ais.kernel.Force`), offsets (s)."""
-
-    vessel: NDArray[np.int64]
-    t: FloatArray
-    z: FloatArray
-    use: NDArray[np.bool_]
-    v0: FloatArray
-    known: NDArray[np.bool_]
-    sog: FloatArray
-    cog: FloatArray
-    sig: FloatArray
-    force: NDArray[np.int8]
-    toff: FloatArray
-
-    def take(self, rows: NDArray[np.bool_] | None, **new: NDArray) -> Rows:
-        """The rows ``rows`` (whole vessels; None: all, not copied), with fields replaced by
-        ``new`` (full length)."""
-        if rows is None:
-            return replace(self, **new)
-        fields = {k: new.get(k, getattr(self, k))[rows] for k in self.__dataclass_fields__}
-        return Rows(**fields)
-
-    def kernel_inputs(self) -> KernelInputs:
-        """:class:`KernelInputs` (vessel boundaries from the sorted vessel ids)."""
-        return KernelInputs(
-            vessel_starts(self.vessel),
-            self.t,
-            self.z,
-            self.use,
-            self.force,
-            self.v0,
-            self.known,
-            self.sog,
-            self.cog,
-            self.sig,
-            self.toff,
-        )
-
-
-def run_rows(rows: Rows, cfg: AisTrackerConfig) -> KernelOutputs:
-    """:func:`~seatrack.filters.ais.kernel.run_kernel` over ``rows``."""
-    return run_kernel(rows.kernel_inputs(), cfg)
+__all__ = ["neighbour_plausibility", "revisit", "merge_outputs"]
 
 
 def merge_outputs(out: KernelOutputs, rows: NDArray[np.bool_], new: KernelOutputs) -> None:
@@ -115,14 +67,8 @@ def neighbour_plausibility(
     n = t.size
     v_prev, v_next, a_chord = np.empty(n), np.empty(n), np.empty(n)
     if n:
-        starts, chunks = vessel_layout(vessel)
-        c = np.ascontiguousarray
         _plausibility_kernel(
-            starts,
-            chunks,
-            c(t, dtype=np.float64),
-            c(xy, dtype=np.float64),
-            c(accepted, dtype=np.bool_),
+            *vessel_rows(vessel, t, xy, accepted),
             *_allowances(config)[:2],
             v_prev,
             v_next,
@@ -177,9 +123,7 @@ def _plausibility_kernel(
     starts, chunks, t, z, accepted, d0, tau, v_prev, v_next, a_chord
 ):  # pragma: no cover - compiled
     for c in prange(chunks.size - 1):
-        size = 1
-        for v in range(chunks[c], chunks[c + 1]):
-            size = max(size, starts[v + 1] - starts[v])
+        size = largest_vessel(starts, chunks, c)
         nxt = np.empty(size, dtype=np.int64)
         for v in range(chunks[c], chunks[c + 1]):
             a, b = starts[v], starts[v + 1]
@@ -244,9 +188,7 @@ def _revisit_kernel(
     starts, chunks, t, z, use, flag, segment, force, par, changed
 ):  # pragma: no cover - compiled
     for c in prange(chunks.size - 1):
-        size = 1
-        for v in range(chunks[c], chunks[c + 1]):
-            size = max(size, starts[v + 1] - starts[v])
+        size = largest_vessel(starts, chunks, c)
         acc, rej = np.empty(size, np.bool_), np.empty(size, np.bool_)
         score, vp, vn, ac = np.empty(size), np.empty(size), np.empty(size), np.empty(size)
         nxt = np.empty(size, dtype=np.int64)
@@ -271,12 +213,15 @@ def _revisit_kernel(
             )
 
 
-def _revisit_once(rows: Rows, out: KernelOutputs, cfg: AisTrackerConfig) -> NDArray[np.bool_]:
+def _revisit_once(
+    rows: KernelInputs, out: KernelOutputs, cfg: AisTrackerConfig
+) -> NDArray[np.bool_]:
     """One revisit pass: sets ``rows.force`` of the revised reports (an outlier plausible
     on both sides is accepted, an accepted report implausible on a side rejected; a
     decision is revised at most once, so the passes end); returns the rows of the vessels
     with a revised report."""
-    starts, chunks = vessel_layout(rows.vessel)
+    starts = rows.starts
+    chunks = thread_chunks(starts)
     changed = np.zeros(starts.size - 1, dtype=np.bool_)
     if rows.t.size:
         _revisit_kernel(
@@ -294,7 +239,7 @@ def _revisit_once(rows: Rows, out: KernelOutputs, cfg: AisTrackerConfig) -> NDAr
     return np.repeat(changed, np.diff(starts))
 
 
-def revisit(rows: Rows, out: KernelOutputs, cfg: AisTrackerConfig) -> None:
+def revisit(rows: KernelInputs, out: KernelOutputs, cfg: AisTrackerConfig) -> None:
     """Up to ``revisit_passes`` passes revisiting the causal decisions with the future
     (two-sided neighbour test): outliers plausible on both sides are accepted and accepted
     reports that are implausible are rejected; the vessels concerned are filtered again.
@@ -303,4 +248,4 @@ def revisit(rows: Rows, out: KernelOutputs, cfg: AisTrackerConfig) -> None:
         redo = _revisit_once(rows, out, cfg)
         if not redo.any():
             break
-        merge_outputs(out, redo, run_rows(rows.take(redo), cfg))
+        merge_outputs(out, redo, run_kernel(take_rows(rows, redo), cfg))

@@ -19,7 +19,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.filters.ais.config import AisTrackerConfig
-from seatrack.filters.ais.kernel import Force, KernelOutputs, OutlierKind, vessel_starts
+from seatrack.filters.ais.kernel import (
+    Force,
+    KernelInputs,
+    KernelOutputs,
+    OutlierKind,
+    run_kernel,
+    take_rows,
+    vessel_index,
+)
 from seatrack.filters.ais.noise import position_noise
 from seatrack.filters.ais.offsets import (
     OffsetScores,
@@ -28,7 +36,7 @@ from seatrack.filters.ais.offsets import (
     prior_counts,
     std_offset_scores,
 )
-from seatrack.filters.ais.plausibility import Rows, merge_outputs, run_rows
+from seatrack.filters.ais.plausibility import merge_outputs
 
 FloatArray = NDArray[np.float64]
 
@@ -71,10 +79,10 @@ class Refinement:
     #: set by a runner holding the parts elsewhere (see :meth:`__getattr__`)
     load_part: Callable[[str], Any]
 
-    def __init__(self, rows: Rows, out: KernelOutputs, cfg: AisTrackerConfig) -> None:
+    def __init__(self, rows: KernelInputs, out: KernelOutputs, cfg: AisTrackerConfig) -> None:
         self.rows, self.out, self.cfg = rows, out, cfg
         self.usable = rows.use & (out.kind == OutlierKind.NONE) & (out.segment >= 0)
-        self.starts = vessel_starts(rows.vessel)
+        self.starts = rows.starts
         self.force_f = rows.force.copy()
         self.force_f[self.usable] = Force.ACCEPT  # the decisions of the passes before
         self.force_f[rows.use & (out.kind == OutlierKind.IMPLAUSIBLE_JUMP)] = Force.REJECT
@@ -112,10 +120,6 @@ class Refinement:
         """The offset scores whose prior the next step needs."""
         return self.current
 
-    def _vessel_index(self) -> NDArray[np.int64]:
-        """Index of each row's vessel (rows sorted by vessel)."""
-        return np.repeat(np.arange(self.starts.size - 1), np.diff(self.starts))
-
     def _per_vessel(self, mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
         """Rows of the vessels with any row in ``mask``."""
         if mask.size == 0:
@@ -130,7 +134,9 @@ class Refinement:
         moved = self._per_vessel(off != 0.0)
         if cfg.estimate_noise:
             fine = replace(cfg, sigma_time_min_s=cfg.sigma_time_fine_s)
-            sig_f = position_noise(rows.vessel, rows.t - off, rows.z, self.usable, fine)
+            sig_f = position_noise(
+                vessel_index(rows.starts), rows.t - off, rows.z, self.usable, fine
+            )
             sig_f[:, 1] = np.where(moved, np.minimum(sig_f[:, 1], rows.sig[:, 1]), rows.sig[:, 1])
         else:
             sig_f = rows.sig.copy()
@@ -141,8 +147,8 @@ class Refinement:
         """The kernel over the vessels of the rows ``sub`` (None: all) with the refined
         noise, decisions and offsets."""
         assert self.sig_f is not None and self.off is not None
-        rows = self.rows.take(sub, sig=self.sig_f, force=self.force_f, toff=self.off)
-        return run_rows(rows, c)
+        rows = take_rows(self.rows, sub, sig=self.sig_f, force=self.force_f, toff=self.off)
+        return run_kernel(rows, c)
 
     def _loo_scores(self) -> OffsetScores:
         """Leave-one-out offset scores from the steady track."""
@@ -182,7 +188,7 @@ class Refinement:
         """Step 4; returns the kernel outputs and the offsets (s) of every row."""
         cfg, alt, off = self.cfg, self.alt, self.off
         assert alt is not None and off is not None, "finish() before seed()"
-        inv_v, nv = self._vessel_index(), self.starts.size - 1
+        inv_v, nv = vessel_index(self.starts), self.starts.size - 1
         # vessels the steady model fits badly (mean NIS above steady_nis_ratio x its 2 dof)
         # are filtered with q_accel too; per vessel the track whose reports have the larger
         # prediction log-likelihood is kept
@@ -256,7 +262,7 @@ def drive(groups: GroupRunner, cfg: AisTrackerConfig) -> None:
 
 
 def refine_pass(
-    rows: Rows, out: KernelOutputs, cfg: AisTrackerConfig
+    rows: KernelInputs, out: KernelOutputs, cfg: AisTrackerConfig
 ) -> tuple[KernelOutputs, FloatArray]:
     """The refinement pass over one table (see :class:`Refinement`)."""
     ref = Refinement(rows, out, cfg)

@@ -15,9 +15,16 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from seatrack.filters.ais.config import NX, AisTrackerConfig
-from seatrack.filters.ais.kernel import Force, KernelOutputs
+from seatrack.filters.ais.kernel import (
+    Force,
+    KernelInputs,
+    KernelOutputs,
+    run_kernel,
+    vessel_index,
+    vessel_starts,
+)
 from seatrack.filters.ais.noise import position_noise
-from seatrack.filters.ais.plausibility import Rows, revisit, run_rows
+from seatrack.filters.ais.plausibility import revisit
 from seatrack.filters.ais.refine import Refinement, refine_groups
 
 FloatArray = NDArray[np.float64]
@@ -82,7 +89,7 @@ class VesselInputs:
 
 def prepare_rows(
     inputs: VesselInputs, cfg: AisTrackerConfig
-) -> tuple[Rows, NDArray[np.int64] | None]:
+) -> tuple[KernelInputs, NDArray[np.int64] | None]:
     """Rows sorted by (vessel, time) (stable: equal times keep their input order) with the
     estimated report noise, and the sort order (None when the inputs were sorted)."""
     vid = np.asarray(inputs.vessel, dtype=np.int64)
@@ -114,18 +121,18 @@ def prepare_rows(
     else:
         sig = np.zeros((n, 2))
         sig[:, 0] = cfg.sigma_pos_m
-    rows = Rows(
-        vs,
-        ts,
-        zs,
-        us,
-        vo,
-        known,
-        opt(inputs.sog, (n,), np.nan),
-        opt(inputs.cog, (n,), np.nan),
-        sig,
-        np.full(n, Force.FREE, dtype=np.int8),
-        np.zeros(n),
+    rows = KernelInputs(
+        starts=vessel_starts(vs),
+        t=ts,
+        z=zs,
+        use=us,
+        force=np.full(n, Force.FREE, dtype=np.int8),
+        v0=vo,
+        known=known,
+        sog=opt(inputs.sog, (n,), np.nan),
+        cog=opt(inputs.cog, (n,), np.nan),
+        sig=sig,
+        toff=np.zeros(n),
     )
     return rows, order
 
@@ -138,15 +145,15 @@ def _sorted(vessel: NDArray[np.int64], t: FloatArray) -> bool:
     return bool(np.all((v1 > v0) | ((v1 == v0) & (t[1:] >= t[:-1]))))
 
 
-def first_track(rows: Rows, cfg: AisTrackerConfig) -> KernelOutputs:
+def first_track(rows: KernelInputs, cfg: AisTrackerConfig) -> KernelOutputs:
     """The kernel and the revisit passes (``rows.force`` is updated)."""
-    out = run_rows(rows, cfg)
+    out = run_kernel(rows, cfg)
     revisit(rows, out, cfg)
     return out
 
 
 def track_states(
-    rows: Rows, out: KernelOutputs, toff: FloatArray, order: NDArray[np.int64] | None
+    rows: KernelInputs, out: KernelOutputs, toff: FloatArray, order: NDArray[np.int64] | None
 ) -> TrackStates:
     """:class:`TrackStates` in input order from the outputs over the sorted rows (``order``
     of :func:`prepare_rows`); segments numbered 1, 2, ... within each vessel in time order."""
@@ -155,7 +162,7 @@ def track_states(
     if has.size:
         ids, first, which = np.unique(seg[has], return_index=True, return_inverse=True)
         by_first = np.argsort(first, kind="stable")  # segments in (vessel, time) order
-        ves = rows.vessel[has[first[by_first]]]
+        ves = vessel_index(rows.starts)[has[first[by_first]]]
         start = np.r_[True, ves[1:] != ves[:-1]]
         pos = np.arange(ids.size)
         num = pos - np.maximum.accumulate(np.where(start, pos, 0)) + 1

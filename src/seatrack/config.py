@@ -29,7 +29,7 @@ import dataclasses
 import functools
 import math
 import tomllib
-from collections.abc import Iterable, Mapping
+from collections.abc import Hashable, Iterable, Mapping
 from pathlib import Path
 from typing import Any, TypeVar, get_type_hints
 
@@ -208,10 +208,14 @@ def _check_bounds(v: float, meta: Mapping[str, Any], where: str) -> None:
         raise ConfigError(f"{where}: must be <= {hi:g} {unit}".rstrip() + f", got {v!r}")
 
 
-@functools.cache
 def field_types(cls: type) -> dict[str, Any]:
     """The evaluated type hints of a config dataclass (cached: evaluating the string
     annotations costs about a millisecond per field, on every run of a method)."""
+    return _field_types(cls)
+
+
+@functools.cache
+def _field_types(cls: Hashable) -> dict[str, Any]:
     return get_type_hints(cls)
 
 

@@ -7,10 +7,7 @@ install command, except under CI (``CI=true``), where a missing browser is a fai
 from __future__ import annotations
 
 import json
-import os
 import re
-import shutil
-import subprocess
 from collections import Counter
 from pathlib import Path
 from typing import Any
@@ -19,6 +16,7 @@ import numpy as np
 import pytest
 
 from ais_samples import data_file
+from browser import browse, chromium
 from seatrack.report.html import (
     VesselTrack,
     geojson,
@@ -29,16 +27,6 @@ from seatrack.report.html import (
     write_html,
 )
 
-CHROMIUM_FLAGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
 # tiles from a closed local port: they fail at once, whatever network the machine has
 DEAD_TILES = "http://127.0.0.1:9/{z}/{x}/{y}.png"
 SEA = (0xCF, 0xE1, 0xEC)
@@ -153,41 +141,10 @@ def test_no_usable_rows_gives_an_empty_map() -> None:
 
 
 # --------------------------------------------------------------------------- Chromium
-def _chromium() -> str:
-    exe = shutil.which("chromium") or shutil.which("chromium-browser")
-    if exe is not None:
-        return exe
-    msg = (
-        "headless Chromium is not on PATH; install it with `apt-get install chromium` "
-        "(Debian/Ubuntu) to run the map page test"
-    )
-    if os.environ.get("CI", "").lower() == "true":
-        pytest.fail(msg + " (required when CI=true)")
-    pytest.skip(msg)
-
-
-def _browse(exe: str, profile: Path, url: str, *args: str) -> subprocess.CompletedProcess[str]:
-    run = subprocess.run(
-        [
-            exe,
-            *CHROMIUM_FLAGS,
-            f"--user-data-dir={profile}",
-            "--virtual-time-budget=5000",
-            *args,
-            url,
-        ],
-        capture_output=True,
-        text=True,
-        timeout=180,
-    )
-    assert run.returncode == 0, run.stderr[-2000:]
-    return run
-
-
 @pytest.fixture(scope="module")
 def browsed(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     """The selected North Sea vessels' map, offline tiles, as the browser drew it."""
-    exe = _chromium()
+    exe = chromium()
     from seatrack.commands.ais import track_files
 
     tmp = tmp_path_factory.mktemp("map")
@@ -197,14 +154,14 @@ def browsed(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     write_html(page, vt, title="selected", tile_url=DEAD_TILES, seamark_url=None)
     text = page.read_text(encoding="utf-8")
     data = json.loads(re.search(r'id="seatrack-data">(.*?)</script>', text, re.S).group(1))
-    dom = _browse(exe, tmp / "p1", page.as_uri(), "--dump-dom").stdout
+    dom = browse(exe, tmp / "p1", page.as_uri(), "--dump-dom").stdout
     shot = tmp / "shot.png"
-    _browse(exe, tmp / "p2", page.as_uri(), f"--screenshot={shot}", "--window-size=1200,800")
+    browse(exe, tmp / "p2", page.as_uri(), f"--screenshot={shot}", "--window-size=1200,800")
     pick = vt[len(vt) // 2].mmsi
-    selected = _browse(exe, tmp / "p3", page.as_uri() + f"#mmsi={pick}", "--dump-dom").stdout
+    selected = browse(exe, tmp / "p3", page.as_uri() + f"#mmsi={pick}", "--dump-dom").stdout
     default = tmp / "default.html"  # OpenStreetMap + OpenSeaMap, opened from disk
     write_html(default, vt, title="default")
-    from_file = _browse(exe, tmp / "p4", default.as_uri(), "--dump-dom").stdout
+    from_file = browse(exe, tmp / "p4", default.as_uri(), "--dump-dom").stdout
     return dict(
         vt=vt, data=data, dom=dom, shot=shot, pick=pick, selected=selected, from_file=from_file
     )

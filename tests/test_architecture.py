@@ -41,6 +41,7 @@ LAYERS: dict[str, int] = {
     "models": 0,
     "config": 0,
     "information": 0,
+    "compiled": 0,
     "data": 0,
     "filters": 1,
     "tma": 1,

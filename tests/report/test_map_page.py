@@ -202,10 +202,9 @@ def test_every_bundled_asset_is_package_data_and_leaflet_is_vendored_with_its_li
     import tomllib
     from pathlib import Path
 
-    import seatrack
-
-    root = Path(seatrack.__file__).parent
-    pyproject = root.parents[1] / "pyproject.toml"
+    repo = Path(__file__).resolve().parents[2]  # the source tree, installed or not
+    root = repo / "src" / "seatrack"
+    pyproject = repo / "pyproject.toml"
     globs = tomllib.loads(pyproject.read_text())["tool"]["setuptools"]["package-data"]["seatrack"]
     assets = root / "report" / "assets"
     files = [p.relative_to(root).as_posix() for p in assets.rglob("*") if p.is_file()]

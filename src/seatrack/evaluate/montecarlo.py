@@ -18,6 +18,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.compiled import compile_all
+
 __all__ = ["MonteCarloResult", "monte_carlo", "run_seeds", "Column", "format_table", "rich_table"]
 
 RunFunction = Callable[[np.random.Generator, int], Mapping[str, Any]]
@@ -139,6 +141,7 @@ def monte_carlo(
                 if bar is not None:
                     bar.advance(task)
         else:
+            compile_all()  # the workers must not compile the same kernels at once (numba #10128)
             with ProcessPoolExecutor(max_workers=processes) as ex:
                 futures = {ex.submit(_one_run, fn, seeds[i], i): i for i in range(n_runs)}
                 from concurrent.futures import as_completed

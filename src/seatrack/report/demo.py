@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from seatrack.compiled import compile_all
 from seatrack.filters.registry import run
 from seatrack.report.plots import save, situation_figure
 from seatrack.simulate.families import HEADLINE_SEEDS, Scenario, labelled_runs
@@ -403,5 +404,6 @@ def run_sections(out: Path, runs: int, processes: int = 1) -> list[Section]:
     keys = list(SECTIONS)
     if processes <= 1:
         return [_one(k, out, runs) for k in keys]
+    compile_all()  # the workers must not compile the same kernels at once (numba #10128)
     with ProcessPoolExecutor(max_workers=processes) as pool:
         return list(pool.map(_one, keys, [out] * len(keys), [runs] * len(keys)))

@@ -32,6 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.compiled import compile_all
 from seatrack.filters.ais import AisTrackerConfig
 from seatrack.filters.ais.offsets import prior_counts
 from seatrack.filters.ais.refine import Refinement, drive, n_ident
@@ -175,6 +176,8 @@ def dask_client(scheduler: str | None = None, processes: bool = True) -> Iterato
             yield client
         return
     n = os.cpu_count() or 1
+    if processes:
+        compile_all()  # the worker processes must not compile the same kernels at once
     with (
         LocalCluster(
             n_workers=n if processes else 1,

@@ -49,6 +49,7 @@ app = typer.Typer(
     "knots at the edges, SI inside).",
     no_args_is_help=True,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,  # plain help texts: "[sensor]", "[elevation_deg]" shown as written
     add_completion=False,
     context_settings={"help_option_names": ["-h", "--help"]},
 )

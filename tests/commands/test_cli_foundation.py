@@ -49,6 +49,14 @@ def test_help(cmd):
     assert "Usage" in res.output and cmd in res.output
 
 
+def test_help_texts_are_shown_as_written():
+    """Square brackets in help texts are text, not markup (they were swallowed)."""
+    res = runner.invoke(app, ["track", "--help"])
+    assert res.exit_code == 0
+    text = " ".join(res.output.split())
+    assert "[elevation_deg], [range_rate_mps]" in text and "a [sensor] table" in text
+
+
 def test_simulate_writes_csv_that_round_trips(tmp_path):
     res = runner.invoke(app, ["simulate", "demo", "--out", str(tmp_path)])
     assert res.exit_code == 0, res.output

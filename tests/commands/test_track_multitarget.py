@@ -99,3 +99,31 @@ def test_evaluate_multitarget_scenario(tmp_path):
     assert [x["tracker"] for x in rows] == ["ekf + gnn", "ekf + jpda"]
     assert float(rows[0]["gospa"]) < 200
     assert (tmp_path / "pics/multitarget_ekf_gnn.png").exists()
+
+
+def test_simulate_a_multitarget_scenario_gives_unlabelled_plots(tmp_path):
+    """``seatrack simulate coastal_multitarget``: plots without a track column (the tracker's
+    input), the origin of every plot by line, and the truth of every target per scan."""
+    r = _seatrack("simulate", "coastal_multitarget", "-o", "sim", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    plots, origin = (
+        _rows(tmp_path / "sim/plots_radar.csv"),
+        _rows(tmp_path / "sim/plot_origin_radar.csv"),
+    )
+    truth = _rows(tmp_path / "sim/truth.csv")
+    assert "track" not in plots[0] and len(plots) == len(origin) > 1000
+    assert [int(o["line"]) for o in origin] == list(range(2, len(plots) + 2))
+    assert all(o["range_m"] == p["range_m"] and o["time_s"] == p["time_s"]
+               for o, p in zip(origin, plots, strict=True))  # fmt: skip
+    t = np.array([float(p["time_s"]) for p in plots])
+    assert np.all(np.diff(t) >= 0)
+    targets = {o["track"] for o in origin} - {"clutter"}
+    assert targets <= {x["target"] for x in truth} and len(targets) >= 10
+    assert 0.2 < np.mean([o["track"] == "clutter" for o in origin]) < 0.8
+    cfg = tmp_path / "radar.toml"
+    cfg.write_text("sigma_range_m = 15.0\nsigma_azimuth_deg = 0.3\n")
+    r = _seatrack("track", "sim/plots_radar.csv", "--config", "radar.toml", "-o", "t.csv",
+                  cwd=tmp_path)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "multi-target (gnn)" in r.stdout
+    assert len({x["track"] for x in _rows(tmp_path / "t.csv")}) >= len(targets) // 2

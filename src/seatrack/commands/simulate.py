@@ -61,6 +61,53 @@ def write_simulation(sim: Any, out: Path) -> list[tuple[Path, int]]:
     return list(zip(paths, rows, strict=True))
 
 
+def multitarget_files(scenario: Any, out: Path) -> list[Path]:
+    """The files :func:`write_multitarget` writes for a ``[multitarget]`` scenario."""
+    from seatrack.evaluate.tracking import tracking_sensor
+
+    name = tracking_sensor(scenario).name
+    return [out / f"plots_{name}.csv", out / f"plot_origin_{name}.csv", out / "truth.csv"]
+
+
+def write_multitarget(scenario: Any, rng: np.random.Generator, out: Path) -> list[tuple[Path, int]]:
+    """One run of a multi-target scenario, as its first active sensor sees it.
+
+    ``plots_<sensor>.csv``: every plot (targets and clutter) WITHOUT a track column, in time
+    order -- the input of the multi-target tracker; ``plot_origin_<sensor>.csv``: each plot
+    with its line in that file and the target it came from (``clutter`` otherwise);
+    ``truth.csv``: every live target at every scan (``time_s, target``, position and
+    velocity). Written together (:func:`seatrack.io.atomic.atomic_files`).
+    """
+    import csv
+    import dataclasses
+
+    from seatrack.evaluate.multitarget import simulate_scenario
+    from seatrack.evaluate.tracking import tracking_sensor
+    from seatrack.io.atomic import atomic_files, atomic_write
+    from seatrack.io.multitarget import write_plot_labels, write_unlabelled_plots
+
+    paths = multitarget_files(scenario, out)
+    prepare_outputs(paths, [out])
+    sim = simulate_scenario(scenario, rng, tracking_sensor(scenario))
+    order = np.argsort(sim.plots.t, kind="stable")
+    plots = sim.plots.take(order)
+    plots = dataclasses.replace(plots, line=np.arange(2, len(plots) + 2, dtype=np.int64))
+    head = ["time_s", "target", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps"]
+    with atomic_files(paths) as (f_plots, f_origin, f_truth):
+        rows = [write_unlabelled_plots(f_plots, plots)]
+        rows.append(write_plot_labels(f_origin, plots, sim.origin[order]))
+        with atomic_write(f_truth, newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(head)
+            for k in range(sim.truth_t.size):
+                vals = [*sim.truth_pos[k], *sim.truth_vel[k]]
+                w.writerow(
+                    [f"{sim.truth_t[k]:.6f}", int(sim.truth_id[k]), *(f"{v:.6f}" for v in vals)]
+                )
+        rows.append(int(sim.truth_t.size))
+    return list(zip(paths, rows, strict=True))
+
+
 def seeded_rng(seed: int, run: int) -> np.random.Generator:
     """The generator of Monte-Carlo run ``run`` under master seed ``seed`` (as in evaluate)."""
     from seatrack.simulate.scenarios import MAX_RUNS
@@ -75,7 +122,8 @@ def register(app: typer.Typer) -> None:
     def simulate(
         scenario: str = typer.Argument(
             ...,
-            help="Scenario TOML file, or the name of a bundled one (demo, linear_cv, tma_classic).",
+            help="Scenario TOML file, or the name of a bundled one (demo, linear_cv, tma_classic, "
+            "coastal_multitarget).",
         ),
         out: Path = typer.Option(Path("seatrack-sim"), "--out", "-o", help="Output folder."),
         seed: int | None = typer.Option(
@@ -91,13 +139,19 @@ def register(app: typer.Typer) -> None:
 
         Writes plots_<sensor>.csv (PLOTS format for `seatrack track`), bearings_<sensor>.csv
         for passive sonars (contact,time_s,bearing_deg,observer_x_m,observer_y_m,sigma_deg),
-        clutter_<sensor>.csv, truth.csv and ownship.csv.
+        clutter_<sensor>.csv, truth.csv and ownship.csv. A scenario with a [multitarget]
+        table (e.g. coastal_multitarget) gives instead plots_<sensor>.csv without a track
+        column (targets and clutter mixed, the multi-target tracker's input),
+        plot_origin_<sensor>.csv (the target of each plot, or clutter) and truth.csv.
         """
         from seatrack.simulate.scenarios import load_scenario, resolve_scenario
 
         sc = load_scenario(resolve_scenario(scenario))
         rng = seeded_rng(sc.seed if seed is None else seed, run)
-        prepare_outputs(simulation_files(sc, out), [out])
-        sim = sc.simulate(rng)
-        for path, n in write_simulation(sim, out):
+        if sc.multitarget is not None:  # unlabelled plots for the multi-target tracker
+            written = write_multitarget(sc, rng, out)
+        else:
+            prepare_outputs(simulation_files(sc, out), [out])
+            written = write_simulation(sc.simulate(rng), out)
+        for path, n in written:
             typer.echo(f"wrote {path} ({n} rows)")

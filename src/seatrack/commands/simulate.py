@@ -78,13 +78,13 @@ def write_multitarget(scenario: Any, rng: np.random.Generator, out: Path) -> lis
     ``truth.csv``: every live target at every scan (``time_s, target``, position and
     velocity). Written together (:func:`seatrack.io.atomic.atomic_files`).
     """
-    import csv
     import dataclasses
 
     from seatrack.evaluate.multitarget import simulate_scenario
     from seatrack.evaluate.tracking import tracking_sensor
-    from seatrack.io.atomic import atomic_files, atomic_write
+    from seatrack.io.atomic import atomic_files
     from seatrack.io.multitarget import write_plot_labels, write_unlabelled_plots
+    from seatrack.simulate.files import write_target_states
 
     paths = multitarget_files(scenario, out)
     prepare_outputs(paths, [out])
@@ -92,19 +92,12 @@ def write_multitarget(scenario: Any, rng: np.random.Generator, out: Path) -> lis
     order = np.argsort(sim.plots.t, kind="stable")
     plots = sim.plots.take(order)
     plots = dataclasses.replace(plots, line=np.arange(2, len(plots) + 2, dtype=np.int64))
-    head = ["time_s", "target", "x_m", "y_m", "z_m", "vx_mps", "vy_mps", "vz_mps"]
     with atomic_files(paths) as (f_plots, f_origin, f_truth):
-        rows = [write_unlabelled_plots(f_plots, plots)]
-        rows.append(write_plot_labels(f_origin, plots, sim.origin[order]))
-        with atomic_write(f_truth, newline="") as fh:
-            w = csv.writer(fh)
-            w.writerow(head)
-            for k in range(sim.truth_t.size):
-                vals = [*sim.truth_pos[k], *sim.truth_vel[k]]
-                w.writerow(
-                    [f"{sim.truth_t[k]:.6f}", int(sim.truth_id[k]), *(f"{v:.6f}" for v in vals)]
-                )
-        rows.append(int(sim.truth_t.size))
+        rows = [
+            write_unlabelled_plots(f_plots, plots),
+            write_plot_labels(f_origin, plots, sim.origin[order]),
+            write_target_states(f_truth, sim.truth_t, sim.truth_id, sim.truth_pos, sim.truth_vel),
+        ]
     return list(zip(paths, rows, strict=True))
 
 

@@ -45,6 +45,7 @@ __all__ = [
     "write_clutter",
     "write_bearings",
     "write_truth",
+    "write_target_states",
     "read_truth",
 ]
 
@@ -257,6 +258,21 @@ def write_truth(
                 w.writerow(([name] if with_name else []) + [_num(v) for v in vals])
                 n += 1
     return n
+
+
+def write_target_states(
+    path: str | Path, t: FloatArray, target: NDArray[np.int64], pos: FloatArray, vel: FloatArray
+) -> int:
+    """Write the truth of a multi-target run: one row per (time, live target) with
+    ``time_s, target`` and the position and velocity columns (s, m, m/s); returns the rows."""
+    cols = [t, *np.asarray(pos, dtype=float).T, *np.asarray(vel, dtype=float).T]
+    text = [np.char.mod("%.6f", c) for c in cols]
+    text.insert(1, np.asarray(target).astype(str))
+    with atomic_write(path, newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["time_s", "target", *STATE_COLUMNS])
+        w.writerows(zip(*text, strict=True))
+    return int(np.asarray(t).size)
 
 
 def read_truth(path: str | Path) -> dict[str, Trajectory]:

@@ -28,14 +28,22 @@ Prototypes:
 * ``ORACLE q`` / ``ORACLE ct`` -- the true centripetal Q schedule / a CT prediction at the
   true turn rate: the head-room of any Q schedule and of a perfect turn-rate estimate.
 
+``--model-bounds`` asks what ANY single motion model could reach on a set (default the two
+weaving sets) with its noise chosen in hindsight: grids of a CV EKF (white acceleration),
+a CA EKF (white jerk), Singer EKFs (acceleration time constants 10 and 30 s) and a CT-EKF
+(white acceleration and turn-rate random walk), each printed as its best RMSE over the best
+CV q and over ``min(narrow, wide)`` (the ``turning`` target is <= 0.95 of the latter).
+
 Run: ``python benchmarks/defaults_experiments.py --runs 20`` (TUNING seeds),
-``--headline`` (HEADLINE seeds), ``--sets``, ``--consistency`` (multiple-model methods).
+``--headline`` (HEADLINE seeds), ``--sets``, ``--consistency`` (multiple-model methods),
+``--model-bounds [--sets ...]``.
 """
 
 from __future__ import annotations
 
 import argparse
 import dataclasses
+import math
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -470,6 +478,98 @@ def consistency(n: int) -> None:
               f"max model probability > 0.99 on {np.mean(pm > 0.99):.2f} of scans")  # fmt: skip
 
 
+def kinematic_matrices(dt: float, q: float, tau: float | None) -> tuple[np.ndarray, np.ndarray]:
+    """Transition and process noise of ``[x, y, vx, vy, ax, ay]``: white jerk of PSD ``q``
+    (m^2/s^5; ``tau`` None, the CA model) or a Singer acceleration of time constant ``tau``
+    (s) driven by white noise of PSD ``q`` (Van Loan discretisation)."""
+    from scipy.linalg import expm
+
+    a = 0.0 if tau is None else 1.0 / tau
+    A = np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [0.0, 0.0, -a]])
+    M = np.zeros((6, 6))
+    M[:3, :3], M[:3, 3:], M[3:, 3:] = -A, np.diag([0.0, 0.0, q]), A.T
+    E = expm(M * dt)
+    F1 = E[3:, 3:].T
+    Q1 = F1 @ E[:3, 3:]
+    F, Q = np.kron(F1, np.eye(2)), np.kron(0.5 * (Q1 + Q1.T), np.eye(2))
+    return F, Q
+
+
+def kinematic_batch(
+    scs: Sequence[Scenario], qs: np.ndarray, tau: float | None, tc: TargetClass
+) -> Estimate:
+    """CA / Singer EKFs on polar plots for every run and every PSD of ``qs`` at once,
+    ``(G, B, N, 4)``; started from the first plot (class speed and acceleration maxima as
+    the velocity and acceleration stds)."""
+    st = stack_plots(scs)
+    z, sen, t = st["z"], st["sensor"], st["t"]
+    B, N, m = z.shape
+    G = len(qs)
+    model = measurement_model(2, 4, m == 3)
+    ang = model.angular.astype(float)
+    x4, P4 = _start(scs, tc.speed_max)
+    x = np.zeros((G, B, 6))
+    x[..., :4] = x4
+    P = np.zeros((G, B, 6, 6))
+    P[..., :4, :4] = P4
+    P[..., 4, 4] = P[..., 5, 5] = tc.accel_max**2
+    R0 = _R(scs, m)
+    out = np.empty((G, B, N, 4))
+    out[:, :, 0] = x4
+    for k in range(1, N):
+        dt = float(t[k] - t[k - 1])
+        pairs = [kinematic_matrices(dt, float(q), tau) for q in qs]
+        Q = np.stack([p[1] for p in pairs])[:, None]
+        x, P = kalman.predict(x, P, pairs[0][0], Q)
+        xs = np.ascontiguousarray(x[..., :4])
+        J = model.jacobian(xs, sen[:, k])
+        H = np.concatenate([J, np.zeros(J.shape[:-1] + (2,))], -1)
+        res = kalman.extended_update(x, P, z[:, k], model.h(xs, sen[:, k]), H, R0, ang,
+                                     check=False)  # fmt: skip
+        x, P = res.x, res.P
+        out[:, :, k] = x[..., :4]
+    return out
+
+
+def model_bounds(set_names: Sequence[str], n: int, tuning: bool) -> None:
+    """Best RMSE of every single motion model with hindsight noise (module docstring)."""
+    from defaults import cv_ekf_batch, q_grid
+    from seatrack.models.targets import target_class
+
+    for name in set_names:
+        ss = SETS[name]
+        scs = [ss.make(k) for k in seeds(n, tuning)]
+        tc = target_class(ss.target)
+        dt = scs[0].dt
+        R0 = _R(scs, 3 if scs[0].plots.has_range_rate else 2)
+        grid = q_grid(tc, dt)
+        cv = rmse(cv_ekf_batch(scs, grid, R0, tc.speed_max), scs)[0]
+        nw = rmse(cv_ekf_batch(scs, np.array([tc.q_steady(dt), tc.q_max(dt)]), R0,
+                               tc.speed_max), scs)[0]  # fmt: skip
+        best, ref = float(np.min(cv)), float(np.min(nw))
+        print(f"{name}: best CV q {grid[int(np.argmin(cv))]:.3g} m^2/s^3, RMSE {best:.1f} m; "
+              f"min(narrow, wide) {ref:.1f} m; turning target {0.95 * ref:.1f} m")  # fmt: skip
+        rows: list[tuple[str, float, str]] = []
+        jerk = np.logspace(-3, 3, 19)
+        for label, tau in (("CA (white jerk)", None), ("Singer tau=30 s", 30.0),
+                           ("Singer tau=10 s", 10.0)):  # fmt: skip
+            pos = rmse(kinematic_batch(scs, jerk, tau, tc), scs)[0]
+            i = int(np.argmin(pos))
+            rows.append((label, float(pos[i]), f"q={jerk[i]:.3g} m^2/s^5"))
+        ct_best = (math.inf, "")
+        for q in np.logspace(-1, 4, 11):
+            for qw in np.logspace(-9, -3, 7):
+                pos = float(rmse(ct_ekf_batch(scs, q, qw, tc.turn_rate_max, tc.speed_max),
+                                 scs)[0])  # fmt: skip
+                if pos < ct_best[0]:
+                    ct_best = (pos, f"q={q:.3g} m^2/s^3, q_omega={qw:.3g} rad^2/s^3")
+        rows.append(("CT-EKF", *ct_best))
+        for label, pos, note in rows:
+            print(f"  {label:18s} {pos:8.1f} m  / best CV q {pos / best:.3f}  "
+                  f"/ min(narrow, wide) {pos / ref:.3f}  ({note})")  # fmt: skip
+        sys.stdout.flush()
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     from seatrack.models.targets import target_class
 
@@ -479,9 +579,14 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap.add_argument("--methods", default="ekf,turning,robust-adaptive,mm-rangerate,imm")
     ap.add_argument("--headline", action="store_true", help="headline seeds (default tuning)")
     ap.add_argument("--consistency", action="store_true", help="multiple-model consistency")
+    ap.add_argument("--model-bounds", action="store_true", help="hindsight single models")
     a = ap.parse_args(argv)
     if a.consistency:
         consistency(a.runs)
+        return
+    if a.model_bounds:
+        sets = a.sets if a.sets != ",".join(SETS) else "weave-aircraft,weave-fighter"
+        model_bounds(sets.split(","), a.runs, not a.headline)
         return
     tuning = not a.headline
     print(f"seeds: {'TUNING' if tuning else 'HEADLINE'}")

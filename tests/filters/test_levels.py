@@ -55,7 +55,11 @@ def test_level_noise_ladder_and_target_levels():
     dt = np.array([2.0, 4.0])
     q, PI = level_noise(LevelConfig(), dt)
     assert np.allclose(q, np.broadcast_to(LADDER, (2, 5)))
-    assert np.allclose(PI.sum(-1), 1.0) and np.allclose(np.diagonal(PI, 0, 1, 2), 0.95)
+    stay = np.exp(-dt / LevelConfig().sojourn_time)[:, None]  # the ladder: mean stay 200 s
+    assert np.allclose(PI.sum(-1), 1.0) and np.allclose(np.diagonal(PI, 0, 1, 2), stay)
+    assert np.allclose(PI[:, 0, 1:], (1 - stay) / 4)
+    _, PI = level_noise(LevelConfig(p_stay=0.9), dt)  # a per-scan persistence when given
+    assert np.allclose(np.diagonal(PI, 0, 1, 2), 0.9)
     cfg = LevelConfig.for_target(AIRCRAFT)
     q, PI = level_noise(cfg, dt)
     assert np.allclose(q[1], np.square([AIRCRAFT.accel_steady, AIRCRAFT.accel_max]) * 4.0)
@@ -73,6 +77,8 @@ def test_level_noise_ladder_and_target_levels():
         {"q_levels": (1.0, -1.0)},
         {"accel_levels": (0.1,), "sojourn_times": (10.0, 20.0)},
         {"q_levels": (1.0, 2.0), "p_stay": 1.0},
+        {"sojourn_time": 0.0},
+        {"sojourn_time": float("nan")},
     ],
 )
 def test_level_config_errors(kw):

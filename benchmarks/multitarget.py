@@ -48,7 +48,11 @@ scan (range 1-40 km, no births or deaths), 17 scans; Stone Soup's GNN only up to
 ``--ss-max`` ships.
 
 Run: ``python benchmarks/multitarget.py`` (everything, about an hour on a loaded machine),
-``--quick`` (S10 only, 30 scans, scaling to 100), ``--tune`` (re-run the searches first).
+``--quick`` (S10 only, 30 scans, scaling to 100), ``--tune`` (re-run the searches first),
+``--localisation`` (where the localisation part of seatrack's GOSPA comes from, on the
+tuning scenarios: matched position errors by track age and, for tracks older than 100 s on
+straight legs, by range beside the error of a least-squares straight-line fit with no
+process noise, ``2 sqrt(sigma_range^2 + sigma_cross^2) / sqrt(n)`` after ``n`` scans).
 """
 
 from __future__ import annotations
@@ -527,6 +531,53 @@ def scaling(sizes: list[int], ss: dict[str, float], ss_max: int, repeat: int, sc
           f"stopped above {ss_max} ships\n{format_table(rows, cols)}")  # fmt: skip
 
 
+def localisation(runs: list[MultiTargetRun]) -> None:
+    """Matched position errors of seatrack's default tracker (module docstring)."""
+    from scipy.optimize import linear_sum_assignment
+
+    for k, run in enumerate(runs):
+        res = run_seatrack(run, TrackerConfig())
+        born = {int(tr): float(res.t[res.track == tr].min()) for tr in np.unique(res.track)}
+        accel = np.zeros(run.truth_t.size)
+        for i in np.unique(run.truth_id):
+            m = np.flatnonzero(run.truth_id == i)
+            if m.size > 1:
+                dv = np.gradient(run.truth_vel[m, :2], run.truth_t[m], axis=0)
+                accel[m] = np.linalg.norm(dv, axis=1)
+        rows = []  # error m, truth acceleration m/s^2, track age s, range m
+        for t in run.scan_times:
+            ti, ei = np.flatnonzero(run.truth_t == t), np.flatnonzero(res.t == t)
+            if ti.size == 0 or ei.size == 0:
+                continue
+            D = np.linalg.norm(run.truth_pos[ti, None, :2] - res.pos[None, ei], axis=-1)
+            r, c = linear_sum_assignment(np.minimum(D, C_GOSPA) ** 2)
+            for a, b in zip(r, c, strict=True):
+                if D[a, b] < C_GOSPA:
+                    age = t - born[int(res.track[ei[b]])]
+                    rows.append(
+                        (D[a, b], accel[ti[a]], age, np.linalg.norm(run.truth_pos[ti[a], :2]))
+                    )
+        e = np.array(rows)
+        e2 = e[:, 0] ** 2
+        turning = e[:, 1] > 0.02
+        share = e2[turning].sum() / e2.sum()
+        print(f"{TUNE[k].name}: {e.shape[0]} matched estimates, RMS {np.sqrt(e2.mean()):.1f} m; "
+              f"manoeuvring truth {np.mean(turning):.0%} of them, {share:.0%} of the squared "
+              f"error (RMS {np.sqrt(e2[turning].mean()):.1f} m)")  # fmt: skip
+        for lo, hi in ((0, 10), (10, 25), (25, 50), (50, 100), (100, np.inf)):
+            m = (e[:, 2] >= lo) & (e[:, 2] < hi) & ~turning
+            share = e2[m].sum() / e2.sum()
+            print(f"  straight, track age {lo:>3}-{hi:<4} s: {m.sum():5d} estimates, RMS "
+                  f"{np.sqrt(e2[m].mean()):5.1f} m, {share:4.0%} of the squared error")  # fmt: skip
+        for lo, hi in ((1e3, 4e3), (4e3, 8e3), (8e3, 12e3), (12e3, 16e3)):
+            m = (e[:, 3] >= lo) & (e[:, 3] < hi) & ~turning & (e[:, 2] > 100)
+            n = 1 + 100 / PERIOD  # scans of a track older than 100 s, at least
+            floor = 2 * math.hypot(SIGMA_R, SIGMA_AZ * (lo + hi) / 2) / math.sqrt(n)
+            print(f"  straight, older than 100 s, range {lo / 1e3:>2.0f}-{hi / 1e3:<2.0f} km: RMS "
+                  f"{np.sqrt(e2[m].mean()):5.1f} m; straight-line fit of {n:.0f} scans, no "
+                  f"process noise: {floor:5.1f} m")  # fmt: skip
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="S10 only, 30 scans, scaling to 100")
@@ -539,11 +590,15 @@ def main() -> None:
     ap.add_argument("--repeat", type=int, default=3, help="seatrack runs per case (best time)")
     ap.add_argument("--ss-max", type=int, default=100, help="largest Stone Soup scaling case")
     ap.add_argument("--no-jpda", action="store_true", help="skip Stone Soup's JPDA")
+    ap.add_argument("--localisation", action="store_true", help="where the GOSPA error is")
     args = ap.parse_args()
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"machine: {os.cpu_count()} cores, load average {load:.1f} at start")
     ss = dict(STONESOUP)
     tune_runs = [simulate(c, TUNE_SEED + k) for k, c in enumerate(TUNE)]
+    if args.localisation:
+        localisation(tune_runs)
+        return
     if args.methods:
         tune_methods(tune_runs)
     if args.tune:

@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 from scipy import integrate, stats
 
-from seatrack import kalman
 from seatrack.config import ConfigError, parse_config
 from seatrack.filters import registry
 from seatrack.filters.base import Plots, SensorNoise, plot_gaussian, run_tracks
@@ -183,7 +182,7 @@ def test_robust_level_likelihoods_are_densities(cls):
                          points=[0.0], limit=200)[0]  # fmt: skip
     # int exp(ll(y, 0)) dy = density of the bearing at 0 = exp(ll(0, 0)) / density of range at 0
     t0 = math.exp(float(student_t_logpdf(np.zeros(1), f._par[3]))) / s0
-    assert val * t0 == pytest.approx(1.0, abs=2e-3)
+    assert val * t0 == pytest.approx(1.0, abs=1e-6)
 
 
 def _probabilities(flt, plots):

@@ -404,6 +404,10 @@ class LevelIMM(CartesianState):
         self.M = self.config.n_levels
         self._noise_cache: dict[float, tuple[FloatArray, FloatArray]] = {}
         self._rule = int(self.rule)
+        self._logp_cache: tuple[FloatArray, FloatArray] = (
+            np.full(self.r.size, np.nan),
+            np.zeros(0),
+        )
         self._par = np.zeros(1)  # the rule's parameters (levels_kernel.level_update_core)
         eps = float(getattr(self.config, "outlier_probability", 0.0))
         self.patterns: tuple[FloatArray, FloatArray, FloatArray] | None = None
@@ -506,13 +510,19 @@ class LevelIMM(CartesianState):
 
     def _patterns(self, eps: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The outlier patterns ``G (C, m)`` with each track's log priors ``(B, C)`` from its
-        channel outlier probabilities ``eps (B, m)``, and the scales ``k`` (the single
+        channel outlier probabilities ``eps (B, m)`` (one row ``(1, C)`` shared by every
+        track when their probabilities are equal), and the scales ``k`` (the single
         Gaussian pattern without outliers)."""
         if self.patterns is None:
             G0, _, k0 = _GAUSSIAN[self.r.size]
-            return G0, np.zeros((len(eps), 1)), k0
+            return G0, np.zeros((1, 1)), k0
         G, _, k = self.patterns
+        row, logp = self._logp_cache
+        if len(eps) and np.array_equal(eps, np.broadcast_to(row, eps.shape)):
+            return G, logp, k  # every track has the cached probabilities (fixed ones)
         logp = np.log(eps) @ G.T + np.log1p(-eps) @ (1.0 - G).T
+        if len(eps) and (eps == eps[0]).all():
+            self._logp_cache = (eps[0].copy(), logp[:1].copy())
         return G, logp, k
 
     def _learn(self, eps: FloatArray, outlier: FloatArray) -> FloatArray:

@@ -322,8 +322,8 @@ def level_update_core(
     are updated on the level-0 prediction instead, without warnings; the caller rejects
     them), sensor ``s (B, 2d)``; ``angular (m,)`` 1 for the wrapped channels; nominal
     variances ``r (m,)``; the ``rule`` (:class:`Rule`), outlier patterns ``G (C, m)`` with
-    per-track log priors ``logp (B, C)`` and scales ``k (m,)``, the rule's parameters
-    ``par``.
+    per-track log priors ``logp (B, C)`` (or one row ``(1, C)`` for all) and scales
+    ``k (m,)``, the rule's parameters ``par``.
 
     Outputs: updated levels ``Xo``, ``PPo``, their log-likelihoods ``ll (B, M)`` (zero for
     unusable plots; not written by the HUBER and STUDENT_T rules, whose density the caller
@@ -344,6 +344,7 @@ def level_update_core(
     e = np.empty(m)
     tmp = np.empty(m)
     for b in range(B):
+        lp = logp[b if logp.shape[0] > 1 else 0]
         for j in range(M):
             sr[j] = s[b]
         H = Hs[b]
@@ -357,12 +358,11 @@ def level_update_core(
                 v = zb[a] - hx[j, a]
                 y[a] = _wrap(v) if angular[a] > 0.0 else v
             if rule == 0:
-                v = mixture_item(PP[b, j], y, H[j], r, G, logp[b], k, Xo[b, j], PPo[b, j],
-                                 o[b, j], ws)  # fmt: skip
+                v = mixture_item(PP[b, j], y, H[j], r, G, lp, k, Xo[b, j], PPo[b, j], o[b, j], ws)
                 for a in range(n):
                     Xo[b, j, a] = X[b, j, a] + Xo[b, j, a]
             elif rule == 1:
-                v = _ramazanov(X[b, j], PP[b, j], y, H[j], r, G, logp[b], k, par, Xo[b, j],
+                v = _ramazanov(X[b, j], PP[b, j], y, H[j], r, G, lp, k, par, Xo[b, j],
                                PPo[b, j], o[b, j], ws, ws1, G1, lp1, k1, rw, tmp)  # fmt: skip
             else:
                 _reweighted(X[b, j], PP[b, j], y, H[j], r, rule, par, Xo[b, j], PPo[b, j],

@@ -77,6 +77,7 @@ from seatrack.filters.base import (
 from seatrack.filters.ekf import sensor_state
 from seatrack.filters.levels_kernel import (
     Rule,
+    dims,
     level_combine_core,
     level_predict_core,
     level_update_core,
@@ -346,7 +347,7 @@ def mixture_update(
     pout = np.empty((N, m))
     mixture_core(
         _flat(P, lead, (n, n)), _flat(y, lead, (m,)), _flat(H, lead, (m, n)),
-        _flat(r, lead, (m,)), G, _flat(logp, lead, (C,)), k, dx, Po, ll, pout,
+        _flat(r, lead, (m,)), G, _flat(logp, lead, (C,)), k, dx, Po, ll, pout, *dims(n, m),
     )  # fmt: skip
     xo = x + dx.reshape(lead + (n,))
     return xo, Po.reshape(lead + (n, n)), ll.reshape(lead), pout.reshape(lead + (m,))
@@ -486,7 +487,8 @@ class LevelIMM(CartesianState):
         Xo, PPo, ll = np.empty_like(X), np.empty_like(PP), np.empty((B, M))
         o, Y, H = np.empty((B, M, m)), np.empty((B, M, m)), np.empty((B, M, m, n))
         level_update_core(X, PP, z, ok, s, self.d, self.range_rate, self.angular, self.r,
-                          self._rule, G, logp, k, self._par, Xo, PPo, ll, o, Y, H)  # fmt: skip
+                          self._rule, G, logp, k, self._par, Xo, PPo, ll, o, Y, H,
+                          *dims(n, m))  # fmt: skip
         if self._rule >= Rule.HUBER.value:
             ll = np.where(ok[:, None], self._level_loglik(Y, H, PP), 0.0)
         mu, x, P = np.empty((B, M)), np.empty((B, n)), np.empty((B, n, n))

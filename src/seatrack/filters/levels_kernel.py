@@ -30,11 +30,19 @@ import numpy as np
 from numba import njit
 
 from seatrack.filters.imm import combine_core, mix_core
-from seatrack.kalman import cholesky_core, forward_core, matmul_core, predict_core
+from seatrack.kalman import (
+    cholesky_core,
+    cholesky_m,
+    forward_core,
+    forward_m,
+    matmul_core,
+    predict_core,
+)
 from seatrack.models.measurement import polar_core
 
 __all__ = [
     "Rule",
+    "dims",
     "mixture_work",
     "mixture_item",
     "mixture_core",
@@ -54,6 +62,12 @@ class Rule(IntEnum):
     RAMAZANOV = 1  #: algorithm R's robust variance; contaminated likelihood
     HUBER = 2  #: Huber IRLS; Student-t level likelihood
     STUDENT_T = 3  #: VB Student-t; Student-t level likelihood
+
+
+def dims(n: int, m: int) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Tuples of lengths ``n`` (state) and ``m`` (plot) for the kernels' ``tn``, ``tm``:
+    numba compiles one specialisation per length, with the sizes as constants."""
+    return (0.0,) * n, (0.0,) * m
 
 
 @njit(cache=True)
@@ -76,7 +90,7 @@ def mixture_work(n, m, C):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def mixture_item(P, y, H, r, G, logp, k, dx, Po, pout, ws):  # pragma: no cover - compiled
+def mixture_item(P, y, H, r, G, logp, k, dx, Po, pout, ws, tn, tm):  # pragma: no cover
     """Update of one Gaussian ``(x, P)`` on the innovation ``y`` under plot noise that is,
     per pattern ``g``, ``N(0, diag(r * k^G_g))`` with prior ``exp(logp_g)``.
 
@@ -86,10 +100,14 @@ def mixture_item(P, y, H, r, G, logp, k, dx, Po, pout, ws):  # pragma: no cover 
     factorisation only. Writes the state correction ``dx``, ``Po`` and the posterior
     outlier probability of each channel ``pout``; returns the log-likelihood. A
     non-positive-definite ``S_g`` gives NaN (``dx`` NaN, ``Po`` and ``pout`` unset).
+
+    ``tn``, ``tm``: tuples of length ``n`` and ``m`` (:func:`dims`): the sizes are then
+    compile-time constants and the small loops unrolled (a third of the time saved,
+    measured on 200 levels, 8 patterns; the same arithmetic).
     """
     PHt, HPH, S, L, Si, u, lw, e, ub, W, PW = ws
-    n = dx.shape[0]
-    m = y.shape[0]
+    n = len(tn)
+    m = len(tm)
     C = G.shape[0]
     matmul_core(P, H.T, PHt)
     matmul_core(H, PHt, HPH)
@@ -98,7 +116,7 @@ def mixture_item(P, y, H, r, G, logp, k, dx, Po, pout, ws):  # pragma: no cover 
             for c in range(m):
                 S[a, c] = 0.5 * (HPH[a, c] + HPH[c, a])
             S[a, a] += r[a] * (k[a] if G[g, a] > 0.0 else 1.0)
-        logdet = cholesky_core(S, L)
+        logdet = cholesky_m(S, L, m)
         if not logdet == logdet:
             for a in range(n):
                 dx[a] = np.nan
@@ -106,7 +124,7 @@ def mixture_item(P, y, H, r, G, logp, k, dx, Po, pout, ws):  # pragma: no cover 
         for col in range(m):  # S^-1 column by column
             for a in range(m):
                 e[a] = 1.0 if a == col else 0.0
-            forward_core(L, e, ub)
+            forward_m(L, e, ub, m)
             for a in range(m - 1, -1, -1):
                 v = ub[a]
                 for b in range(a + 1, m):
@@ -157,12 +175,13 @@ def mixture_item(P, y, H, r, G, logp, k, dx, Po, pout, ws):  # pragma: no cover 
 
 
 @njit(cache=True)
-def mixture_core(P, y, H, r, G, logp, k, dx, Po, ll, pout):  # pragma: no cover - compiled
+def mixture_core(P, y, H, r, G, logp, k, dx, Po, ll, pout, tn, tm):  # pragma: no cover
     """:func:`mixture_item` over a batch: ``P (N, n, n)``, ``y (N, m)``, ``H (N, m, n)``,
     ``r (N, m)``, ``logp (N, C)``; writes ``dx (N, n)``, ``Po``, ``ll (N,)``, ``pout``."""
     ws = mixture_work(dx.shape[1], y.shape[1], G.shape[0])
     for i in range(dx.shape[0]):
-        ll[i] = mixture_item(P[i], y[i], H[i], r[i], G, logp[i], k, dx[i], Po[i], pout[i], ws)
+        ll[i] = mixture_item(P[i], y[i], H[i], r[i], G, logp[i], k, dx[i], Po[i], pout[i], ws,
+                             tn, tm)  # fmt: skip
 
 
 @njit(cache=True)
@@ -214,7 +233,7 @@ def _hph_diag(H, P, out):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def _ramazanov(  # pragma: no cover - compiled
-    x, P, y, H, r, G, logp, k, par, xo, Po, o, ws, ws1, G1, lp1, k1, rw, tmp
+    x, P, y, H, r, G, logp, k, par, xo, Po, o, ws, ws1, G1, lp1, k1, rw, tmp, tn, tm
 ):
     """Algorithm R's robust variance per channel, then the Gaussian update; returns the
     contaminated log-likelihood (nominal ``r``). ``par = [Delta_c]``."""
@@ -225,17 +244,17 @@ def _ramazanov(  # pragma: no cover - compiled
         out = y2 / (tmp[a] + r[a]) > par[a]
         o[a] = 1.0 if out else 0.0
         rw[a] = y2 / par[a] - tmp[a] if out else r[a]
-    mixture_item(P, y, H, rw, G1, lp1, k1, xo, Po, tmp, ws1)
+    mixture_item(P, y, H, rw, G1, lp1, k1, xo, Po, tmp, ws1, tn, tm)
     for a in range(n):
         xo[a] = x[a] + xo[a]
     dx = np.empty(n)
     Ps = np.empty((n, n))
-    return mixture_item(P, y, H, r, G, logp, k, dx, Ps, tmp, ws)
+    return mixture_item(P, y, H, r, G, logp, k, dx, Ps, tmp, ws, tn, tm)
 
 
 @njit(cache=True)
 def _reweighted(  # pragma: no cover - compiled
-    x, P, y, H, r, rule, par, xo, Po, o, ws1, G1, lp1, k1, rw, e, tmp
+    x, P, y, H, r, rule, par, xo, Po, o, ws1, G1, lp1, k1, rw, e, tmp, tn, tm
 ):
     """Huber IRLS (``rule`` HUBER) or VB Student-t (STUDENT_T) update with the nominal
     ``R = diag(r)``, ``par = [iterations, c or nu, flag threshold]``."""
@@ -246,7 +265,7 @@ def _reweighted(  # pragma: no cover - compiled
     for a in range(m):
         o[a] = 0.0
     if not huber:  # the VB iteration starts at the plain update
-        mixture_item(P, y, H, r, G1, lp1, k1, dx, Po, tmp, ws1)
+        mixture_item(P, y, H, r, G1, lp1, k1, dx, Po, tmp, ws1, tn, tm)
         for a in range(n):
             xo[a] = x[a] + dx[a]
     for it in range(iterations):
@@ -275,7 +294,7 @@ def _reweighted(  # pragma: no cover - compiled
                 aa = (e[a] * e[a] + tmp[a]) / r[a]
                 o[a] = 1.0 if aa > par[2] else 0.0
                 rw[a] = r[a] / ((nu + 1.0) / (nu + aa))
-        mixture_item(P, y, H, rw, G1, lp1, k1, dx, Po, tmp, ws1)
+        mixture_item(P, y, H, rw, G1, lp1, k1, dx, Po, tmp, ws1, tn, tm)
         for a in range(n):
             xo[a] = x[a] + dx[a]
 
@@ -313,7 +332,7 @@ def _nis(x, P, z, s, d, rr, angular, r, hx, H, y):  # pragma: no cover - compile
 
 @njit(cache=True)
 def level_update_core(
-    X, PP, z, ok, s, d, rr, angular, r, rule, G, logp, k, par, Xo, PPo, ll, o, Y, Hs
+    X, PP, z, ok, s, d, rr, angular, r, rule, G, logp, k, par, Xo, PPo, ll, o, Y, Hs, tn, tm
 ):  # pragma: no cover - compiled  # fmt: skip
     """The update of every level of every track.
 
@@ -323,7 +342,7 @@ def level_update_core(
     them), sensor ``s (B, 2d)``; ``angular (m,)`` 1 for the wrapped channels; nominal
     variances ``r (m,)``; the ``rule`` (:class:`Rule`), outlier patterns ``G (C, m)`` with
     per-track log priors ``logp (B, C)`` (or one row ``(1, C)`` for all) and scales
-    ``k (m,)``, the rule's parameters ``par``.
+    ``k (m,)``, the rule's parameters ``par``; ``tn``, ``tm`` = :func:`dims`.
 
     Outputs: updated levels ``Xo``, ``PPo``, their log-likelihoods ``ll (B, M)`` (zero for
     unusable plots; not written by the HUBER and STUDENT_T rules, whose density the caller
@@ -358,15 +377,16 @@ def level_update_core(
                 v = zb[a] - hx[j, a]
                 y[a] = _wrap(v) if angular[a] > 0.0 else v
             if rule == 0:
-                v = mixture_item(PP[b, j], y, H[j], r, G, lp, k, Xo[b, j], PPo[b, j], o[b, j], ws)
+                v = mixture_item(PP[b, j], y, H[j], r, G, lp, k, Xo[b, j], PPo[b, j], o[b, j], ws,
+                                 tn, tm)  # fmt: skip
                 for a in range(n):
                     Xo[b, j, a] = X[b, j, a] + Xo[b, j, a]
             elif rule == 1:
-                v = _ramazanov(X[b, j], PP[b, j], y, H[j], r, G, lp, k, par, Xo[b, j],
-                               PPo[b, j], o[b, j], ws, ws1, G1, lp1, k1, rw, tmp)  # fmt: skip
+                v = _ramazanov(X[b, j], PP[b, j], y, H[j], r, G, lp, k, par, Xo[b, j], PPo[b, j],
+                               o[b, j], ws, ws1, G1, lp1, k1, rw, tmp, tn, tm)  # fmt: skip
             else:
                 _reweighted(X[b, j], PP[b, j], y, H[j], r, rule, par, Xo[b, j], PPo[b, j],
-                            o[b, j], ws1, G1, lp1, k1, rw, e, tmp)  # fmt: skip
+                            o[b, j], ws1, G1, lp1, k1, rw, e, tmp, tn, tm)  # fmt: skip
                 continue
             ll[b, j] = v if ok[b] else 0.0
 

@@ -233,7 +233,7 @@ def _hph_diag(H, P, out):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def _ramazanov(  # pragma: no cover - compiled
-    x, P, y, H, r, G, logp, k, par, xo, Po, o, ws, ws1, G1, lp1, k1, rw, tmp, tn, tm
+    x, P, y, H, r, G, logp, k, par, xo, Po, o, ws, ws1, G1, lp1, k1, rw, tmp, dx, Ps, tn, tm
 ):
     """Algorithm R's robust variance per channel, then the Gaussian update; returns the
     contaminated log-likelihood (nominal ``r``). ``par = [Delta_c]``."""
@@ -247,21 +247,18 @@ def _ramazanov(  # pragma: no cover - compiled
     mixture_item(P, y, H, rw, G1, lp1, k1, xo, Po, tmp, ws1, tn, tm)
     for a in range(n):
         xo[a] = x[a] + xo[a]
-    dx = np.empty(n)
-    Ps = np.empty((n, n))
     return mixture_item(P, y, H, r, G, logp, k, dx, Ps, tmp, ws, tn, tm)
 
 
 @njit(cache=True)
 def _reweighted(  # pragma: no cover - compiled
-    x, P, y, H, r, rule, par, xo, Po, o, ws1, G1, lp1, k1, rw, e, tmp, tn, tm
+    x, P, y, H, r, rule, par, xo, Po, o, ws1, G1, lp1, k1, rw, e, tmp, dx, tn, tm
 ):
     """Huber IRLS (``rule`` HUBER) or VB Student-t (STUDENT_T) update with the nominal
     ``R = diag(r)``, ``par = [iterations, c or nu, flag threshold]``."""
     m, n = H.shape
     huber = rule == 2
     iterations = int(par[0])
-    dx = np.empty(n)
     for a in range(m):
         o[a] = 0.0
     if not huber:  # the VB iteration starts at the plain update
@@ -300,17 +297,15 @@ def _reweighted(  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _nis(x, P, z, s, d, rr, angular, r, hx, H, y):  # pragma: no cover - compiled
-    """``y^T S^-1 y`` of plot ``z`` against the combined prediction ``(x, P)``."""
+def _nis(x, P, z, s, d, rr, angular, r, hx, H, y, HP, A, S, L, w):  # pragma: no cover
+    """``y^T S^-1 y`` of plot ``z`` against the combined prediction ``(x, P)`` (the other
+    arguments: scratch)."""
     m = z.shape[0]
     n = x.shape[0]
     polar_core(x.reshape((1, n)), s.reshape((1, s.shape[0])), d, rr, hx, H)
     for a in range(m):
         v = z[a] - hx[0, a]
         y[a] = _wrap(v) if angular[a] > 0.0 else v
-    HP = np.empty((m, n))
-    A = np.empty((m, m))
-    S = np.empty((m, m))
     matmul_core(H[0], P, HP)
     matmul_core(HP, H[0].T, A)
     for a in range(m):
@@ -318,8 +313,6 @@ def _nis(x, P, z, s, d, rr, angular, r, hx, H, y):  # pragma: no cover - compile
     for a in range(m):
         for c in range(m):
             S[a, c] = 0.5 * (A[a, c] + A[c, a])
-    L = np.empty((m, m))
-    w = np.empty(m)
     logdet = cholesky_core(S, L)
     if not logdet == logdet:  # NaN: not positive definite
         return np.nan
@@ -362,6 +355,8 @@ def level_update_core(
     rw = np.empty(m)
     e = np.empty(m)
     tmp = np.empty(m)
+    dx = np.empty(n)
+    Ps = np.empty((n, n))
     for b in range(B):
         lp = logp[b if logp.shape[0] > 1 else 0]
         for j in range(M):
@@ -383,10 +378,10 @@ def level_update_core(
                     Xo[b, j, a] = X[b, j, a] + Xo[b, j, a]
             elif rule == 1:
                 v = _ramazanov(X[b, j], PP[b, j], y, H[j], r, G, lp, k, par, Xo[b, j], PPo[b, j],
-                               o[b, j], ws, ws1, G1, lp1, k1, rw, tmp, tn, tm)  # fmt: skip
+                               o[b, j], ws, ws1, G1, lp1, k1, rw, tmp, dx, Ps, tn, tm)  # fmt: skip
             else:
                 _reweighted(X[b, j], PP[b, j], y, H[j], r, rule, par, Xo[b, j], PPo[b, j],
-                            o[b, j], ws1, G1, lp1, k1, rw, e, tmp, tn, tm)  # fmt: skip
+                            o[b, j], ws1, G1, lp1, k1, rw, e, tmp, dx, tn, tm)  # fmt: skip
                 continue
             ll[b, j] = v if ok[b] else 0.0
 
@@ -407,6 +402,7 @@ def level_combine_core(
     hx = np.empty((1, m))
     H = np.empty((1, m, n))
     y = np.empty(m)
+    HP, A, S, L, w = np.empty((m, n)), np.empty((m, m)), np.empty((m, m)), np.empty((m, m)), y * 0
     for b in range(B):
         tot[b] = combine_core(Xo[b], PPo[b], mu[b], ll[b], out, muo[b], x[b], P[b])
         for a in range(m):
@@ -415,6 +411,6 @@ def level_combine_core(
                 v += muo[b, j] * o[b, j, a]
             outl[b, a] = v
         if ok[b]:
-            nis[b] = _nis(xp[b], Pp[b], z[b], s[b], d, rr, angular, r, hx, H, y)
+            nis[b] = _nis(xp[b], Pp[b], z[b], s[b], d, rr, angular, r, hx, H, y, HP, A, S, L, w)
         else:
             nis[b] = np.nan

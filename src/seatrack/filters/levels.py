@@ -38,10 +38,9 @@ the model probabilities:
   (:func:`seatrack.filters.robust_baselines.student_t_update`), likelihood the Student-t
   density of each innovation component.
 
-Every step is a handful of compiled batch calls: the IMM mixing kernel, one Kalman
-prediction over ``(tracks, levels)``, the polar Jacobians of all levels, one (or, with
-outliers, ``2^m``) Kalman updates over ``(tracks, levels[, patterns])`` and the compiled
-combination.
+Every scan of a batch of tracks is three compiled calls (:mod:`seatrack.filters.levels_kernel`):
+mixing + prediction + combination; the polar prediction and the rule's update of every
+level; the level probabilities, combination and NIS.
 
 References: Blom & Bar-Shalom, IEEE T-AC 33(8), 1988; Bar-Shalom, Li & Kirubarajan 2001,
 sec. 11.6; Huber 1964 (least favourable distribution); Li & Jilkov 2005 (multiple-model
@@ -481,7 +480,7 @@ class LevelIMM(CartesianState):
         B, M, n = X.shape
         z = np.ascontiguousarray(plots.polar(self.range_rate))
         m = z.shape[1]
-        ok = np.isfinite(z).all(-1)
+        ok = np.asarray(np.isfinite(z).all(-1), dtype=bool)
         s = np.ascontiguousarray(sensor_state(plots, self.d))
         G, logp, k = self._patterns(a["eps"])
         Xo, PPo, ll = np.empty_like(X), np.empty_like(PP), np.empty((B, M))

@@ -132,7 +132,7 @@ def markov_predict_core(PI, mu, out):  # pragma: no cover - compiled
         out[j] = s
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def mix_core(X, P, mu, PI, valid, X0, P0, c):  # pragma: no cover - compiled
     """Mixing (BLK 11.6.6 steps 1-2) with model-own augmentation of missing components."""
     M, n = X.shape
@@ -182,7 +182,7 @@ def mix_core(X, P, mu, PI, valid, X0, P0, c):  # pragma: no cover - compiled
                         P0[j, b, a] += v
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def combine_core(X, P, c, ll, out, mu, x, Pc):  # pragma: no cover - compiled
     """Model probabilities ``mu_j ∝ c_j exp(ll_j)`` in log space, then moment matching on the
     components listed in ``out`` (indices as floats); returns ``log sum_j c_j exp(ll_j)``."""

@@ -62,7 +62,9 @@ __all__ = [
     "cov_core",
     "mahalanobis",
     "cholesky_core",
+    "cholesky_m",
     "forward_core",
+    "forward_m",
     "predict_core",
     "update_core",
     "wrap_angle",
@@ -171,7 +173,13 @@ def cholesky_core(S, L):  # pragma: no cover - compiled
 
     Returns NaN (``L`` then incomplete) when ``S`` is not positive definite.
     """
-    m = S.shape[0]
+    return cholesky_m(S, L, S.shape[0])
+
+
+@njit(cache=True, inline="always")
+def cholesky_m(S, L, m):  # pragma: no cover - compiled
+    """:func:`cholesky_core` of the leading ``m x m`` block, inlined: a caller that knows
+    ``m`` at compile time (e.g. ``len`` of a tuple) gets fully unrolled loops."""
     L[:, :] = 0.0
     logdet = 0.0
     for j in range(m):
@@ -194,7 +202,13 @@ def cholesky_core(S, L):  # pragma: no cover - compiled
 @njit(cache=True)
 def forward_core(L, y, w):  # pragma: no cover - compiled
     """Forward substitution ``w = L^-1 y`` for lower-triangular ``L``."""
-    for i in range(y.shape[0]):
+    forward_m(L, y, w, y.shape[0])
+
+
+@njit(cache=True, inline="always")
+def forward_m(L, y, w, m):  # pragma: no cover - compiled
+    """:func:`forward_core` of the first ``m`` components, inlined (see :func:`cholesky_m`)."""
+    for i in range(m):
         v = y[i]
         for k in range(i):
             v -= L[i, k] * w[k]

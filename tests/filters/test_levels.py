@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 from scipy import integrate, stats
 
-from seatrack import kalman
 from seatrack.config import ConfigError, parse_config
 from seatrack.filters import registry
 from seatrack.filters.base import Plots, SensorNoise, plot_gaussian, run_tracks
@@ -29,6 +28,7 @@ from seatrack.filters.levels import (
     level_noise,
     mixture_update,
     outlier_patterns,
+    student_t_logpdf,
 )
 from seatrack.models.targets import AIRCRAFT, SHIP
 from seatrack.simulate import Leg, NoiseModel, observe, trajectory
@@ -166,10 +166,23 @@ def test_equal_times_predict_changes_nothing():
 
 
 @pytest.mark.parametrize("cls", [HuberLevels, StudentTLevels])
-def test_robust_densities_integrate_to_one(cls):
+def test_robust_level_likelihoods_are_densities(cls):
+    """The level likelihood of the Huber / Student-t levels is a density of the plot: with
+    ``P = 0``, ``H = I`` the range channel integrates to one (bearing held at 0, whose
+    density factors out)."""
     f = cls(None, SENSOR)
-    val = integrate.quad(lambda u: math.exp(f._density(np.array([[u]]))[0]), -200, 200)[0]
-    assert val == pytest.approx(1.0, abs=1e-6)
+    H = np.eye(2)[None, None]
+    P = np.zeros((1, 1, 2, 2))
+
+    def ll(y0: float, y1: float) -> float:
+        return float(f._level_loglik(np.array([[[y0, y1]]]), H, P)[0, 0])
+
+    s0 = math.sqrt(f.r[0])
+    val = integrate.quad(lambda y: math.exp(ll(y, 0.0) - ll(0.0, 0.0)), -400 * s0, 400 * s0,
+                         points=[0.0], limit=200)[0]  # fmt: skip
+    # int exp(ll(y, 0)) dy = density of the bearing at 0 = exp(ll(0, 0)) / density of range at 0
+    t0 = math.exp(float(student_t_logpdf(np.zeros(1), f._par[3]))) / s0
+    assert val * t0 == pytest.approx(1.0, abs=1e-6)
 
 
 def _probabilities(flt, plots):
@@ -230,25 +243,6 @@ def test_the_ladder_is_not_overconfident_on_a_straight_target():
         nees.append(float(e @ np.linalg.solve(st.P[0], e)))
     lo, hi = stats.chi2.ppf([0.005, 0.995], 4 * 30) / 30
     assert lo / 2 < np.mean(nees) < hi
-
-
-def test_kalman_update_is_the_gaussian_rule():
-    """epsilon = 0: the compiled mixture update is the (Joseph-form) EKF update."""
-    f = LevelIMM(LevelIMMConfig(outlier_probability=0.0), SENSOR)
-    assert f.patterns is None
-    rng = np.random.default_rng(0)
-    X = np.tile([3e3, 4e3, 5.0, 1.0], (2, 5, 1)) + rng.normal(size=(2, 5, 4))
-    P = np.tile(np.diag([100.0, 100.0, 4.0, 4.0]), (2, 5, 1, 1))
-    z = np.array([[5e3, 0.64], [5.01e3, 0.65]])
-    from seatrack.models.measurement import polar_measurement
-
-    hx, H = polar_measurement(X.reshape(10, 4), np.zeros((10, 4)), 2)
-    res = f._rule(X, P, z, hx.reshape(2, 5, 2), H.reshape(2, 5, 2, 4))
-    ref = kalman.extended_update(X, P, z[:, None], hx.reshape(2, 5, 2), H.reshape(2, 5, 2, 4),
-                                 f.R, f.angular)  # fmt: skip
-    assert np.allclose(res.X, ref.x, rtol=1e-12, atol=1e-9)
-    assert np.allclose(res.P, ref.P, rtol=1e-9, atol=1e-9)
-    assert np.allclose(res.ll, ref.log_likelihood, rtol=1e-12)
 
 
 @pytest.mark.parametrize("epsilon, lo, hi", [(0.0, 0.0, 0.03), (0.2, 0.12, 0.3)])

@@ -67,7 +67,9 @@ __all__ = [
     "IMMStep",
     "mix",
     "markov_predict_core",
+    "mix_core",
     "combine",
+    "combine_core",
     "check_transition",
     "CVCTIMM",
     "CVCTIMMConfig",
@@ -130,13 +132,8 @@ def markov_predict_core(PI, mu, out):  # pragma: no cover - compiled
         out[j] = s
 
 
-@guvectorize(
-    ["void(f8[:,:], f8[:,:,:], f8[:], f8[:,:], f8[:,:], f8[:,:], f8[:,:,:], f8[:])"],
-    "(M,n),(M,n,n),(M),(M,M),(M,n)->(M,n),(M,n,n),(M)",
-    nopython=True,
-    cache=True,
-)
-def _mix_kernel(X, P, mu, PI, valid, X0, P0, c):  # pragma: no cover - compiled
+@njit(cache=True, inline="always")
+def mix_core(X, P, mu, PI, valid, X0, P0, c):  # pragma: no cover - compiled
     """Mixing (BLK 11.6.6 steps 1-2) with model-own augmentation of missing components."""
     M, n = X.shape
     markov_predict_core(PI, mu, c)
@@ -185,15 +182,10 @@ def _mix_kernel(X, P, mu, PI, valid, X0, P0, c):  # pragma: no cover - compiled
                         P0[j, b, a] += v
 
 
-@guvectorize(
-    ["void(f8[:,:], f8[:,:,:], f8[:], f8[:], f8[:], f8[:], f8[:], f8[:,:], f8[:])"],
-    "(M,n),(M,n,n),(M),(M),(k)->(M),(k),(k,k),()",
-    nopython=True,
-    cache=True,
-)
-def _combine_kernel(X, P, c, ll, out, mu, x, Pc, tot):  # pragma: no cover - compiled
+@njit(cache=True, inline="always")
+def combine_core(X, P, c, ll, out, mu, x, Pc):  # pragma: no cover - compiled
     """Model probabilities ``mu_j ∝ c_j exp(ll_j)`` in log space, then moment matching on the
-    components listed in ``out`` (indices as floats)."""
+    components listed in ``out`` (indices as floats); returns ``log sum_j c_j exp(ll_j)``."""
     M = X.shape[0]
     k = out.shape[0]
     a = np.empty(M)
@@ -206,7 +198,6 @@ def _combine_kernel(X, P, c, ll, out, mu, x, Pc, tot):  # pragma: no cover - com
     for j in range(M):
         s += math.exp(a[j] - amax) if a[j] > -np.inf else 0.0
     lse = amax + math.log(s)
-    tot[0] = lse
     for j in range(M):
         mu[j] = math.exp(a[j] - lse) if a[j] > -np.inf else 0.0
     for p in range(k):
@@ -224,6 +215,27 @@ def _combine_kernel(X, P, c, ll, out, mu, x, Pc, tot):  # pragma: no cover - com
                 v += mu[j] * (P[j, ip, iq] + (X[j, ip] - x[p]) * (X[j, iq] - x[q]))
             Pc[p, q] = v
             Pc[q, p] = v
+    return lse
+
+
+@guvectorize(
+    ["void(f8[:,:], f8[:,:,:], f8[:], f8[:,:], f8[:,:], f8[:,:], f8[:,:,:], f8[:])"],
+    "(M,n),(M,n,n),(M),(M,M),(M,n)->(M,n),(M,n,n),(M)",
+    nopython=True,
+    cache=True,
+)
+def _mix_kernel(X, P, mu, PI, valid, X0, P0, c):  # pragma: no cover - compiled
+    mix_core(X, P, mu, PI, valid, X0, P0, c)
+
+
+@guvectorize(
+    ["void(f8[:,:], f8[:,:,:], f8[:], f8[:], f8[:], f8[:], f8[:], f8[:,:], f8[:])"],
+    "(M,n),(M,n,n),(M),(M),(k)->(M),(k),(k,k),()",
+    nopython=True,
+    cache=True,
+)
+def _combine_kernel(X, P, c, ll, out, mu, x, Pc, tot):  # pragma: no cover - compiled
+    tot[0] = combine_core(X, P, c, ll, out, mu, x, Pc)
 
 
 def mix(

@@ -38,10 +38,9 @@ the model probabilities:
   (:func:`seatrack.filters.robust_baselines.student_t_update`), likelihood the Student-t
   density of each innovation component.
 
-Every step is a handful of compiled batch calls: the IMM mixing kernel, one Kalman
-prediction over ``(tracks, levels)``, the polar Jacobians of all levels, one (or, with
-outliers, ``2^m``) Kalman updates over ``(tracks, levels[, patterns])`` and the compiled
-combination.
+Every scan of a batch of tracks is three compiled calls (:mod:`seatrack.filters.levels_kernel`):
+mixing + prediction + combination; the polar prediction and the rule's update of every
+level; the level probabilities, combination and NIS.
 
 References: Blom & Bar-Shalom, IEEE T-AC 33(8), 1988; Bar-Shalom, Li & Kirubarajan 2001,
 sec. 11.6; Huber 1964 (least favourable distribution); Li & Jilkov 2005 (multiple-model
@@ -56,7 +55,6 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 from scipy.special import gammaln
 
@@ -73,18 +71,17 @@ from seatrack.filters.base import (
     predicted,
     speed_sigma_param,
     step_times,
-    usable,
     wrap_angles,
 )
 from seatrack.filters.ekf import sensor_state
-from seatrack.filters.imm import IMMState, combine, mix
-from seatrack.filters.robust_baselines import (
-    HuberConfig,
-    StudentTConfig,
-    huber_update,
-    student_t_update,
+from seatrack.filters.levels_kernel import (
+    Rule,
+    dims,
+    level_combine_core,
+    level_predict_core,
+    level_update_core,
+    mixture_core,
 )
-from seatrack.kalman import cholesky_core, forward_core, matmul_core
 from seatrack.models.measurement import polar_measurement
 from seatrack.models.motion import cv_matrices
 from seatrack.models.targets import TargetClass
@@ -111,8 +108,6 @@ __all__ = [
     "HuberLevels",
     "StudentTLevels",
 ]
-
-_LOG_2PI = math.log(2.0 * math.pi)
 
 #: the range a learnt channel outlier probability is kept in
 _EPS_RANGE = (1e-3, 0.4)
@@ -313,103 +308,6 @@ def outlier_patterns(scales: FloatArray, epsilon: float) -> tuple[FloatArray, Fl
     return G, logp
 
 
-@njit(cache=True)
-def _mixture_core(P, y, H, r, G, logp, k, dx, Po, ll, pout):  # pragma: no cover - compiled
-    """Update of ``N`` Gaussians ``(x_i, P_i)`` on innovations ``y_i`` under plot noise that
-    is, per pattern ``g``, ``N(0, diag(r_i * k^G_g))`` with prior ``exp(logp_g)``.
-
-    With ``u_g = S_g^-1 y`` and weights ``w_g ∝ pi_g N(y; 0, S_g)`` the collapsed posterior
-    is exactly ``x + P H^T u``, ``P - P H^T W H P`` with ``u = sum w_g u_g`` and
-    ``W = sum w_g (S_g^-1 - (u_g - u)(u_g - u)^T)`` -- every pattern costs an ``m x m``
-    factorisation only. Writes the state correction ``dx``, ``Po``, the log-likelihood and
-    the posterior outlier probability of each channel; a non-positive-definite ``S_g``
-    gives NaN.
-    """
-    N, n = dx.shape
-    m = y.shape[1]
-    C = G.shape[0]
-    PHt = np.empty((n, m))
-    HPH = np.empty((m, m))
-    S = np.empty((m, m))
-    L = np.empty((m, m))
-    Si = np.empty((C, m, m))
-    u = np.empty((C, m))
-    lw = np.empty(C)
-    e = np.empty(m)
-    ub = np.empty(m)
-    W = np.empty((m, m))
-    PW = np.empty((n, m))
-    for i in range(N):
-        matmul_core(P[i], H[i].T, PHt)
-        matmul_core(H[i], PHt, HPH)
-        bad = False
-        for g in range(C):
-            for a in range(m):
-                for c in range(m):
-                    S[a, c] = 0.5 * (HPH[a, c] + HPH[c, a])
-                S[a, a] += r[i, a] * (k[a] if G[g, a] > 0.0 else 1.0)
-            logdet = cholesky_core(S, L)
-            if not logdet == logdet:
-                bad = True
-                break
-            for col in range(m):  # S^-1 column by column
-                for a in range(m):
-                    e[a] = 1.0 if a == col else 0.0
-                forward_core(L, e, ub)
-                for a in range(m - 1, -1, -1):
-                    v = ub[a]
-                    for b in range(a + 1, m):
-                        v -= L[b, a] * Si[g, b, col]
-                    Si[g, a, col] = v / L[a, a]
-            q = 0.0
-            for a in range(m):
-                v = 0.0
-                for b in range(m):
-                    v += Si[g, a, b] * y[i, b]
-                u[g, a] = v
-                q += y[i, a] * v
-            lw[g] = logp[i, g] - 0.5 * (q + logdet + m * _LOG_2PI)
-        if bad:
-            ll[i] = np.nan
-            for a in range(n):
-                dx[i, a] = np.nan
-            continue
-        top = lw.max()
-        tot = 0.0
-        for g in range(C):
-            tot += math.exp(lw[g] - top)
-        lse = top + math.log(tot)
-        ll[i] = lse
-        for a in range(m):
-            ub[a] = 0.0
-            pout[i, a] = 0.0
-            for c in range(m):
-                W[a, c] = 0.0
-        for g in range(C):
-            w = math.exp(lw[g] - lse)
-            for a in range(m):
-                ub[a] += w * u[g, a]
-                pout[i, a] += w * G[g, a]
-                for c in range(m):
-                    W[a, c] += w * (Si[g, a, c] - u[g, a] * u[g, c])
-        for a in range(m):
-            for c in range(m):
-                W[a, c] += ub[a] * ub[c]
-        for a in range(n):
-            v = 0.0
-            for c in range(m):
-                v += PHt[a, c] * ub[c]
-            dx[i, a] = v
-        matmul_core(PHt, W, PW)
-        for a in range(n):
-            for b in range(a, n):
-                v = P[i, a, b]
-                for c in range(m):
-                    v -= PW[a, c] * PHt[b, c]
-                Po[i, a, b] = v
-                Po[i, b, a] = v
-
-
 #: the single pattern of Gaussian plot noise, per measurement size
 _GAUSSIAN = {m: (np.zeros((1, m)), np.zeros(1), np.ones(m)) for m in range(1, 6)}
 
@@ -436,7 +334,7 @@ def mixture_update(
 
     Returns the collapsed posterior ``x``, ``P``, the log-likelihood ``(...)`` and the
     posterior outlier probability of each channel ``(..., m)`` (compiled
-    :func:`_mixture_core`).
+    :func:`seatrack.filters.levels_kernel.mixture_core`).
     """
     lead, n, m = x.shape[:-1], x.shape[-1], y.shape[-1]
     N = int(np.prod(lead))
@@ -446,9 +344,9 @@ def mixture_update(
     Po = np.empty((N, n, n))
     ll = np.empty(N)
     pout = np.empty((N, m))
-    _mixture_core(
+    mixture_core(
         _flat(P, lead, (n, n)), _flat(y, lead, (m,)), _flat(H, lead, (m, n)),
-        _flat(r, lead, (m,)), G, _flat(logp, lead, (C,)), k, dx, Po, ll, pout,
+        _flat(r, lead, (m,)), G, _flat(logp, lead, (C,)), k, dx, Po, ll, pout, *dims(n, m),
     )  # fmt: skip
     xo = x + dx.reshape(lead + (n,))
     return xo, Po.reshape(lead + (n, n)), ll.reshape(lead), pout.reshape(lead + (m,))
@@ -468,17 +366,6 @@ def _hph(H: FloatArray, P: FloatArray) -> FloatArray:
 # ---------------------------------------------------------------------------
 # The filter on the contract
 # ---------------------------------------------------------------------------
-@dataclass(frozen=True)
-class _Updated:
-    """One rule's update of every level: states, covariances, log-likelihoods ``(B, M)``
-    and a per-channel outlier score ``(B, M, m)`` in [0, 1]."""
-
-    X: FloatArray
-    P: FloatArray
-    ll: FloatArray
-    outlier: FloatArray
-
-
 class LevelIMM(CartesianState):
     """IMM of constant-velocity EKFs with process-noise levels (Gaussian plots).
 
@@ -490,6 +377,9 @@ class LevelIMM(CartesianState):
 
     Config: ClassVar[type] = LevelIMMConfig
     dims: ClassVar[tuple[int, ...]] = (2, 3)
+    #: the update of the levels (:class:`seatrack.filters.levels_kernel.Rule`): the exact
+    #: update under Gaussian or, with an outlier probability, contaminated plot noise
+    rule: ClassVar[Rule] = Rule.MIXTURE
 
     def __init__(
         self,
@@ -512,7 +402,13 @@ class LevelIMM(CartesianState):
             ang[2] = 1.0  # elevation
         self.angular = ang
         self.M = self.config.n_levels
-        self._valid = np.ones((self.M, 2 * d))
+        self._noise_cache: dict[float, tuple[FloatArray, FloatArray]] = {}
+        self._rule = int(self.rule)
+        self._logp_cache: tuple[FloatArray, FloatArray] = (
+            np.full(self.r.size, np.nan),
+            np.zeros(0),
+        )
+        self._par = np.zeros(1)  # the rule's parameters (levels_kernel.level_update_core)
         eps = float(getattr(self.config, "outlier_probability", 0.0))
         self.patterns: tuple[FloatArray, FloatArray, FloatArray] | None = None
         if eps > 0:
@@ -521,7 +417,7 @@ class LevelIMM(CartesianState):
         self._rule_setup()
 
     def _rule_setup(self) -> None:
-        """Constants of the update rule (subclasses)."""
+        """Constants of the update rule (subclasses): ``self._par``."""
 
     # -- contract ------------------------------------------------------------------
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
@@ -541,17 +437,32 @@ class LevelIMM(CartesianState):
     def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
         tt, dt = step_times(state, t)
         a = state.aux
-        q, PI = level_noise(self.config, dt)
-        n = state.x.shape[1]
-        X0, P0, c = mix(IMMState(a["X"], a["PP"], a["mu"]), PI, self._valid)
+        q, PI = self._level_noise(dt)
         F, Q1 = cv_matrices(dt, 1.0, self.d)  # one cached pair when the scans are regular
-        Q1 = Q1[:, None] if Q1.ndim == 3 else Q1
-        F = F[:, None] if F.ndim == 3 else F
-        X, PP = kalman.predict(X0, P0, F, q[:, :, None, None] * Q1)
-        _, x, P, _ = combine(X, PP, c, np.zeros_like(c), np.arange(n))
+        B, n = state.x.shape
+        X, PP = np.empty_like(a["X"]), np.empty_like(a["PP"])
+        c, x, P = np.empty_like(a["mu"]), np.empty((B, n)), np.empty((B, n, n))
+        level_predict_core(
+            a["X"], a["PP"], a["mu"], PI, q, F.reshape(-1, n, n), Q1.reshape(-1, n, n),
+            X, PP, c, x, P,
+        )  # fmt: skip
+        q = np.broadcast_to(q, c.shape) if q.shape != c.shape else q
         out = predicted(state, tt, x, P, {"X": X, "PP": PP, "mu": c, "q": q})
         still = dt <= 0  # predicting to the same time changes nothing
         return out.where(still, predicted(state, tt, state.x, state.P)) if still.any() else out
+
+    def _level_noise(self, dt: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """:func:`level_noise`, computed once for a regular scan (``q (1, M)``, ``PI (1, M,
+        M)`` shared by every track) and cached per interval."""
+        if dt.size == 0 or not np.all(dt == dt[0]):
+            return level_noise(self.config, dt)
+        key = float(dt[0])
+        hit = self._noise_cache.get(key)
+        if hit is None:
+            if len(self._noise_cache) > 64:
+                self._noise_cache.clear()
+            hit = self._noise_cache[key] = level_noise(self.config, dt[:1])
+        return hit
 
     def _measure(self, x: FloatArray, plots: Plots, reps: int) -> tuple[FloatArray, FloatArray]:
         """``h(x)`` and Jacobians of states ``x (B * reps, n)`` (``reps`` per plot)."""
@@ -565,37 +476,55 @@ class LevelIMM(CartesianState):
 
     def update(self, state: TrackState, plots: Plots) -> TrackState:
         a = state.aux
-        B, M = len(state), self.M
         X, PP = a["X"], a["PP"]
-        n = X.shape[-1]
-        hx, H = self._measure(X.reshape(B * M, n), plots, M)
-        hx, H = hx.reshape(B, M, -1), H.reshape(B, M, -1, n)
-        z, ok = usable(plots.polar(self.range_rate), hx[:, 0])
-        with np.errstate(all="ignore"):
-            y, S = self.innovation(state, plots)
-            res = self._rule(X, PP, z, hx, H, self._patterns(a["eps"]))
-            ll = np.where(ok[:, None], res.ll, 0.0)
-            mu, x, P, tot = combine(res.X, res.P, a["mu"], ll, np.arange(n))
-            nis = kalman.mahalanobis(y, S)
-        outl = np.einsum("bj,bjm->bm", mu, res.outlier)
-        aux = {
-            "X": res.X,
-            "PP": res.P,
-            "mu": mu,
-            "outlier": outl,
-            "eps": self._learn(a["eps"], outl),
-        }
+        B, M, n = X.shape
+        z = np.ascontiguousarray(plots.polar(self.range_rate))
+        m = z.shape[1]
+        ok = np.asarray(np.isfinite(z).all(-1), dtype=bool)
+        s = np.ascontiguousarray(sensor_state(plots, self.d))
+        G, logp, k = self._patterns(a["eps"])
+        Xo, PPo, ll = np.empty_like(X), np.empty_like(PP), np.empty((B, M))
+        o, Y, H = np.empty((B, M, m)), np.empty((B, M, m)), np.empty((B, M, m, n))
+        level_update_core(X, PP, z, ok, s, self.d, self.range_rate, self.angular, self.r,
+                          self._rule, G, logp, k, self._par, Xo, PPo, ll, o, Y, H,
+                          *dims(n, m))  # fmt: skip
+        if self._rule >= Rule.HUBER.value:
+            ll = np.where(ok[:, None], self._level_loglik(Y, H, PP), 0.0)
+        mu, x, P = np.empty((B, M)), np.empty((B, n)), np.empty((B, n, n))
+        tot, outl, nis = np.empty(B), np.empty((B, m)), np.empty(B)
+        level_combine_core(
+            Xo, PPo, a["mu"], ll, o, ok, np.ascontiguousarray(state.x),
+            np.ascontiguousarray(state.P), z, s, self.d, self.range_rate, self.angular, self.r,
+            mu, x, P, tot, outl, nis,
+        )  # fmt: skip
+        aux = {"X": Xo, "PP": PPo, "mu": mu, "outlier": outl, "eps": self._learn(a["eps"], outl)}
         aux |= self._after_update(state.replace(x=x, P=P, aux=aux))
         return finish_update(state, x, P, nis, tot, state.t, aux, ok)
 
-    def _patterns(self, eps: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray] | None:
-        """The outlier patterns with each track's log priors ``(B, 1, C)`` from its channel
-        outlier probabilities ``eps (B, m)``."""
+    def _level_loglik(self, y: FloatArray, H: FloatArray, P: FloatArray) -> FloatArray:
+        """Log-likelihoods ``(B, M)`` of the levels under the HUBER and STUDENT_T rules: the
+        Student-t density (``self._par[3]`` degrees of freedom) of each innovation
+        component ``y_c / sqrt((H P H^T)_cc + r_c)``."""
+        with np.errstate(all="ignore"):  # a bad plot gives NaN, rejected
+            s = np.diagonal(_hph(H, P), axis1=-2, axis2=-1) + self.r
+            return student_t_logpdf(y / np.sqrt(s), self._par[3]) - 0.5 * np.log(s).sum(-1)
+
+    def _patterns(self, eps: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """The outlier patterns ``G (C, m)`` with each track's log priors ``(B, C)`` from its
+        channel outlier probabilities ``eps (B, m)`` (one row ``(1, C)`` shared by every
+        track when their probabilities are equal), and the scales ``k`` (the single
+        Gaussian pattern without outliers)."""
         if self.patterns is None:
-            return None
+            G0, _, k0 = _GAUSSIAN[self.r.size]
+            return G0, np.zeros((1, 1)), k0
         G, _, k = self.patterns
+        row, logp = self._logp_cache
+        if len(eps) and np.array_equal(eps, np.broadcast_to(row, eps.shape)):
+            return G, logp, k  # every track has the cached probabilities (fixed ones)
         logp = np.log(eps) @ G.T + np.log1p(-eps) @ (1.0 - G).T
-        return G, logp[:, None, :], k
+        if len(eps) and (eps == eps[0]).all():
+            self._logp_cache = (eps[0].copy(), logp[:1].copy())
+        return G, logp, k
 
     def _learn(self, eps: FloatArray, outlier: FloatArray) -> FloatArray:
         """The channel outlier probabilities after this scan: a running mean of the
@@ -609,21 +538,6 @@ class LevelIMM(CartesianState):
         """Extra ``aux`` entries from the updated batch (subclasses; rejected plots keep the
         prior's)."""
         return {}
-
-    def _rule(
-        self,
-        X: FloatArray,
-        P: FloatArray,
-        z: FloatArray,
-        hx: FloatArray,
-        H: FloatArray,
-        patterns: Any = None,
-    ) -> _Updated:
-        """The update of every level: exact under the contaminated noise (``patterns``:
-        :meth:`_patterns`), else the Gaussian EKF update (:func:`mixture_update`)."""
-        y = wrap_angles(z[:, None] - hx, self.angular)
-        x, Pm, ll, p = mixture_update(X, P, y, H, self.r, patterns)
-        return _Updated(x, Pm, ll, p)
 
     def columns(self, state: TrackState) -> dict[str, NDArray[Any]]:
         """Common columns, ``p_manoeuvre`` (probability of every level but the quietest),
@@ -660,127 +574,52 @@ class RamazanovLevels(LevelIMM):
     Config: ClassVar[type] = RamazanovConfig
     dims: ClassVar[tuple[int, ...]] = (2,)
 
-    def _rule(
-        self,
-        X: FloatArray,
-        P: FloatArray,
-        z: FloatArray,
-        hx: FloatArray,
-        H: FloatArray,
-        patterns: Any = None,
-    ) -> _Updated:
-        c = self.config
-        delta = np.array([c.delta_range, c.delta_bearing])
-        y = wrap_angles(z[:, None] - hx, self.angular)
-        hph = np.einsum("...ij,...jk,...ik->...i", H, P, H)
-        out = y**2 / (hph + self.r) > delta
-        r = np.where(out, y**2 / delta - hph, self.r)
-        x, Pm, _, _ = mixture_update(X, P, y, H, r)
-        ll = contaminated_loglik(y, H, P, self.r, patterns)
-        return _Updated(x, Pm, ll, out.astype(float))
+    rule = Rule.RAMAZANOV
 
-
-def _whitened(
-    y: FloatArray, H: FloatArray, P: FloatArray, r: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    """Innovation components over their predicted std ``y_c / sqrt((H P H^T)_cc + r_c)``,
-    and the log of those stds summed (for the densities)."""
-    s = np.diagonal(_hph(H, P), axis1=-2, axis2=-1) + r
-    return y / np.sqrt(s), 0.5 * np.log(s).sum(-1)
-
-
-@dataclass(frozen=True)
-class _Result:
-    """The fields of an update the reweighting of :mod:`robust_baselines` reads."""
-
-    x: FloatArray
-    P: FloatArray
-    y: FloatArray
-
-
-def _kernel_update(
-    x: FloatArray,
-    P: FloatArray,
-    z: FloatArray,
-    hx: FloatArray,
-    H: FloatArray,
-    R: FloatArray,
-    angular: ArrayLike,
-    check: bool = False,
-) -> _Result:
-    """:func:`seatrack.kalman.extended_update` with a diagonal ``R`` through the compiled
-    :func:`mixture_update` (one call for every level of every track; non-positive-definite
-    innovation covariances give NaN, rejected by the caller)."""
-    y = wrap_angles(z - hx, np.asarray(angular, dtype=float))
-    xo, Po, _, _ = mixture_update(x, P, y, H, np.diagonal(R, axis1=-2, axis2=-1))
-    return _Result(xo, Po, y)
+    def _rule_setup(self) -> None:
+        self._par = np.array([self.config.delta_range, self.config.delta_bearing])
 
 
 def student_t_logpdf(u: FloatArray, nu: float) -> FloatArray:
     """Log density of independent unit Student-t components ``u`` (summed over the last
     axis), ``nu`` degrees of freedom."""
-    log_norm = float(gammaln((nu + 1) / 2) - gammaln(nu / 2) - 0.5 * math.log(nu * math.pi))
-    return np.asarray((log_norm - 0.5 * (nu + 1) * np.log1p(u**2 / nu)).sum(-1))
+    return np.asarray((_t_log_norm(nu) - 0.5 * (nu + 1) * np.log1p(u**2 / nu)).sum(-1))
 
 
-class _RobustRule(LevelIMM):
-    """Shared shell of the Huber / Student-t levels: a robust update of
-    :mod:`seatrack.filters.robust_baselines` and a heavy-tailed density."""
-
-    dims: ClassVar[tuple[int, ...]] = (2,)
-    _cfg: Any
-    update_fn: Any
-
-    def _density(self, u: FloatArray) -> FloatArray:
-        raise NotImplementedError
-
-    def _rule(
-        self,
-        X: FloatArray,
-        P: FloatArray,
-        z: FloatArray,
-        hx: FloatArray,
-        H: FloatArray,
-        patterns: Any = None,
-    ) -> _Updated:
-        zz = np.broadcast_to(z[:, None], hx.shape)
-        res, flags = self.update_fn(X, P, zz, hx, H, self.R, self.r, self._cfg, False,
-                                    _kernel_update)  # fmt: skip
-        y = wrap_angles(zz - hx, self.angular)
-        u, logs = _whitened(y, H, P, self.r)
-        return _Updated(res.x, res.P, self._density(u) - logs, flags.astype(float))
+def _t_log_norm(nu: float) -> float:
+    """Log normaliser of the unit Student-t density with ``nu`` degrees of freedom."""
+    return float(gammaln((nu + 1) / 2) - gammaln(nu / 2) - 0.5 * math.log(nu * math.pi))
 
 
-class HuberLevels(_RobustRule):
-    """``--method huber``: level IMM with Huber's IRLS update; level likelihood Student-t
-    (``level_nu``), not Huber's least favourable density: its Laplace tails let a gross
-    outlier vote ~7 nats for a level twice as wide (the IMM went agile, 20 m/s velocity
-    errors at 20 % contamination); log tails give ~2. Tuning seeds of
+class HuberLevels(LevelIMM):
+    """``--method huber``: level IMM with Huber's IRLS update
+    (:func:`seatrack.filters.robust_baselines.huber_update`, compiled in
+    :mod:`seatrack.filters.levels_kernel`); level likelihood Student-t (``level_nu``) of
+    the whitened innovation, not Huber's least favourable density: its Laplace tails let a
+    gross outlier vote ~7 nats for a level twice as wide (the IMM went agile, 20 m/s
+    velocity errors at 20 % contamination); log tails give ~2. Tuning seeds of
     ``benchmarks/defaults.py``: 36.1 / 41.3 m -> 19.5 / 27.9 m on the contaminated sets,
     0-5 % on the clean ones."""
 
     Config: ClassVar[type] = HuberLevelsConfig
-    update_fn = staticmethod(huber_update)
+    dims: ClassVar[tuple[int, ...]] = (2,)
+    rule = Rule.HUBER
 
     def _rule_setup(self) -> None:
         c = self.config
-        self._cfg: Any = HuberConfig(c=c.c, iterations=c.iterations)
-
-    def _density(self, u: FloatArray) -> FloatArray:
-        return student_t_logpdf(u, self.config.level_nu)
+        self._par = np.array([c.iterations, c.c, 0.0, c.level_nu, _t_log_norm(c.level_nu)])
 
 
-class StudentTLevels(_RobustRule):
-    """``--method student-t``: level IMM with the VB Student-t update; level likelihood
-    the Student-t density of each whitened innovation component."""
+class StudentTLevels(LevelIMM):
+    """``--method student-t``: level IMM with the VB Student-t update
+    (:func:`seatrack.filters.robust_baselines.student_t_update`, per channel, compiled in
+    :mod:`seatrack.filters.levels_kernel`); level likelihood the Student-t density of each
+    whitened innovation component."""
 
     Config: ClassVar[type] = StudentTLevelsConfig
-    update_fn = staticmethod(student_t_update)
+    dims: ClassVar[tuple[int, ...]] = (2,)
+    rule = Rule.STUDENT_T
 
     def _rule_setup(self) -> None:
         c = self.config
-        self._cfg = StudentTConfig(nu=c.nu, iterations=c.iterations,
-                                   flag_threshold=c.flag_threshold)  # fmt: skip
-
-    def _density(self, u: FloatArray) -> FloatArray:
-        return student_t_logpdf(u, self._cfg.nu)
+        self._par = np.array([c.iterations, c.nu, c.flag_threshold, c.nu, _t_log_norm(c.nu)])

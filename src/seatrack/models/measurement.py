@@ -43,6 +43,7 @@ __all__ = [
     "range_rate",
     "range_rate_jacobian",
     "polar_measurement",
+    "polar_core",
 ]
 
 
@@ -305,7 +306,7 @@ class Stacked:
 # Compiled polar plot prediction for a batch (range, azimuth, [elevation], [range rate])
 # ---------------------------------------------------------------------------
 @njit(cache=True)
-def _polar_core(x, s, d, rr, hx, H):  # pragma: no cover - compiled
+def polar_core(x, s, d, rr, hx, H):  # pragma: no cover - compiled
     """``h(x)`` and its Jacobian for a batch: state positions ``0..d-1``, velocities
     ``d..2d-1``; sensor ``s = [position (d), velocity (d)]``. Same maths as
     :class:`RangeBearing`, :class:`RangeBearingElevation` and :class:`RangeRate`."""
@@ -357,5 +358,5 @@ def polar_measurement(
     hx = np.empty((xx.shape[0], m))
     H = np.empty((xx.shape[0], m, xx.shape[1]))
     with np.errstate(all="ignore"):
-        _polar_core(xx, ss, d, bool(range_rate), hx, H)
+        polar_core(xx, ss, d, bool(range_rate), hx, H)
     return hx, H

@@ -237,7 +237,7 @@ def test_kalman_update_is_the_gaussian_rule():
     from seatrack.models.measurement import polar_measurement
 
     hx, H = polar_measurement(X.reshape(10, 4), np.zeros((10, 4)), 2)
-    res = f._rule(X, P, z, hx.reshape(2, 5, 2), H.reshape(2, 5, 2, 4))
+    res = f._rule(f._linearised(X, P, z, hx.reshape(2, 5, 2), H.reshape(2, 5, 2, 4)))
     ref = kalman.extended_update(X, P, z[:, None], hx.reshape(2, 5, 2), H.reshape(2, 5, 2, 4),
                                  f.R, f.angular)  # fmt: skip
     assert np.allclose(res.X, ref.x, rtol=1e-12, atol=1e-9)

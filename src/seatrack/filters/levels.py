@@ -32,10 +32,11 @@ the model probabilities:
   agile level within a few scans;
 * ``ramazanov`` -- algorithm R's robust variance per channel (``r_c <- y_c^2 / Delta_c -
   (H P H^T)_cc`` when ``J_c = y_c^2 / S_cc > Delta_c``), likelihood the contaminated one;
-* ``huber`` -- Huber's IRLS update (:func:`seatrack.filters.robust_baselines.huber_update`),
-  likelihood Huber's least favourable density of the whitened innovation components;
-* ``student-t`` -- the VB Student-t update
-  (:func:`seatrack.filters.robust_baselines.student_t_update`), likelihood the Student-t
+* ``huber`` -- Huber's IRLS update (:func:`seatrack.filters.robust_baselines.reweighted_update`
+  with a :class:`~seatrack.filters.robust_baselines.HuberConfig`), likelihood the Student-t
+  density of the whitened innovation components (see :class:`HuberLevels`);
+* ``student-t`` -- the VB Student-t update (the same function with a
+  :class:`~seatrack.filters.robust_baselines.StudentTConfig`), likelihood the Student-t
   density of each innovation component.
 
 Every step is a handful of compiled batch calls: the IMM mixing kernel, one Kalman
@@ -81,8 +82,7 @@ from seatrack.filters.imm import IMMState, combine, mix
 from seatrack.filters.robust_baselines import (
     HuberConfig,
     StudentTConfig,
-    huber_update,
-    student_t_update,
+    reweighted_update,
 )
 from seatrack.kalman import cholesky_core, forward_core, matmul_core
 from seatrack.models.measurement import polar_measurement
@@ -451,6 +451,21 @@ def _hph(H: FloatArray, P: FloatArray) -> FloatArray:
 # The filter on the contract
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
+class _Linearised:
+    """Every level's prior and its linearised measurement, the input of a rule: states
+    ``X (B, M, n)``, covariances ``P (B, M, n, n)``, the plots ``z (B, M, m)`` (each track's
+    plot repeated for its levels), ``hx (B, M, m)``, Jacobians ``H (B, M, m, n)`` and the
+    innovations ``y = z - hx (B, M, m)`` (angles wrapped)."""
+
+    X: FloatArray
+    P: FloatArray
+    z: FloatArray
+    hx: FloatArray
+    H: FloatArray
+    y: FloatArray
+
+
+@dataclass(frozen=True)
 class _Updated:
     """One rule's update of every level: states, covariances, log-likelihoods ``(B, M)``
     and a per-channel outlier score ``(B, M, m)`` in [0, 1]."""
@@ -555,7 +570,7 @@ class LevelIMM(CartesianState):
         z, ok = usable(plots.polar(self.range_rate), hx[:, 0])
         with np.errstate(all="ignore"):
             y, S = self.innovation(state, plots)
-            res = self._rule(X, PP, z, hx, H, self._patterns(a["eps"]))
+            res = self._rule(self._linearised(X, PP, z, hx, H), self._patterns(a["eps"]))
             ll = np.where(ok[:, None], res.ll, 0.0)
             mu, x, P, tot = combine(res.X, res.P, a["mu"], ll, np.arange(n))
             nis = kalman.mahalanobis(y, S)
@@ -569,6 +584,13 @@ class LevelIMM(CartesianState):
         }
         aux |= self._after_update(state.replace(x=x, P=P, aux=aux))
         return finish_update(state, x, P, nis, tot, state.t, aux, ok)
+
+    def _linearised(
+        self, X: FloatArray, P: FloatArray, z: FloatArray, hx: FloatArray, H: FloatArray
+    ) -> _Linearised:
+        """The input of :meth:`_rule` from the plots ``z (B, m)`` of the tracks."""
+        zz = np.broadcast_to(z[:, None], hx.shape)
+        return _Linearised(X, P, zz, hx, H, wrap_angles(zz - hx, self.angular))
 
     def _patterns(self, eps: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray] | None:
         """The outlier patterns with each track's log priors ``(B, 1, C)`` from its channel
@@ -592,19 +614,10 @@ class LevelIMM(CartesianState):
         prior's)."""
         return {}
 
-    def _rule(
-        self,
-        X: FloatArray,
-        P: FloatArray,
-        z: FloatArray,
-        hx: FloatArray,
-        H: FloatArray,
-        patterns: Any = None,
-    ) -> _Updated:
+    def _rule(self, lin: _Linearised, patterns: Any = None) -> _Updated:
         """The update of every level: exact under the contaminated noise (``patterns``:
         :meth:`_patterns`), else the Gaussian EKF update (:func:`mixture_update`)."""
-        y = wrap_angles(z[:, None] - hx, self.angular)
-        x, Pm, ll, p = mixture_update(X, P, y, H, self.r, patterns)
+        x, Pm, ll, p = mixture_update(lin.X, lin.P, lin.y, lin.H, self.r, patterns)
         return _Updated(x, Pm, ll, p)
 
     def columns(self, state: TrackState) -> dict[str, NDArray[Any]]:
@@ -642,22 +655,14 @@ class RamazanovLevels(LevelIMM):
     Config: ClassVar[type] = RamazanovConfig
     dims: ClassVar[tuple[int, ...]] = (2,)
 
-    def _rule(
-        self,
-        X: FloatArray,
-        P: FloatArray,
-        z: FloatArray,
-        hx: FloatArray,
-        H: FloatArray,
-        patterns: Any = None,
-    ) -> _Updated:
+    def _rule(self, lin: _Linearised, patterns: Any = None) -> _Updated:
         c = self.config
         delta = np.array([c.delta_range, c.delta_bearing])
-        y = wrap_angles(z[:, None] - hx, self.angular)
+        y, H, P = lin.y, lin.H, lin.P
         hph = np.einsum("...ij,...jk,...ik->...i", H, P, H)
         out = y**2 / (hph + self.r) > delta
         r = np.where(out, y**2 / delta - hph, self.r)
-        x, Pm, _, _ = mixture_update(X, P, y, H, r)
+        x, Pm, _, _ = mixture_update(lin.X, P, y, H, r)
         ll = contaminated_loglik(y, H, P, self.r, patterns)
         return _Updated(x, Pm, ll, out.astype(float))
 
@@ -710,26 +715,15 @@ class _RobustRule(LevelIMM):
     :mod:`seatrack.filters.robust_baselines` and a heavy-tailed density."""
 
     dims: ClassVar[tuple[int, ...]] = (2,)
-    _cfg: Any
-    update_fn: Any
+    _cfg: HuberConfig | StudentTConfig
 
     def _density(self, u: FloatArray) -> FloatArray:
         raise NotImplementedError
 
-    def _rule(
-        self,
-        X: FloatArray,
-        P: FloatArray,
-        z: FloatArray,
-        hx: FloatArray,
-        H: FloatArray,
-        patterns: Any = None,
-    ) -> _Updated:
-        zz = np.broadcast_to(z[:, None], hx.shape)
-        res, flags = self.update_fn(X, P, zz, hx, H, self.R, self.r, self._cfg, False,
-                                    _kernel_update)  # fmt: skip
-        y = wrap_angles(zz - hx, self.angular)
-        u, logs = _whitened(y, H, P, self.r)
+    def _rule(self, lin: _Linearised, patterns: Any = None) -> _Updated:
+        res, flags = reweighted_update(lin.X, lin.P, lin.z, lin.hx, lin.H, self.R, self.r,
+                                       self._cfg, False, _kernel_update)  # fmt: skip
+        u, logs = _whitened(lin.y, lin.H, lin.P, self.r)
         return _Updated(res.x, res.P, self._density(u) - logs, flags.astype(float))
 
 
@@ -742,11 +736,10 @@ class HuberLevels(_RobustRule):
     0-5 % on the clean ones."""
 
     Config: ClassVar[type] = HuberLevelsConfig
-    update_fn = staticmethod(huber_update)
 
     def _rule_setup(self) -> None:
         c = self.config
-        self._cfg: Any = HuberConfig(c=c.c, iterations=c.iterations)
+        self._cfg = HuberConfig(c=c.c, iterations=c.iterations)
 
     def _density(self, u: FloatArray) -> FloatArray:
         return student_t_logpdf(u, self.config.level_nu)
@@ -757,7 +750,6 @@ class StudentTLevels(_RobustRule):
     the Student-t density of each whitened innovation component."""
 
     Config: ClassVar[type] = StudentTLevelsConfig
-    update_fn = staticmethod(student_t_update)
 
     def _rule_setup(self) -> None:
         c = self.config
@@ -765,4 +757,4 @@ class StudentTLevels(_RobustRule):
                                    flag_threshold=c.flag_threshold)  # fmt: skip
 
     def _density(self, u: FloatArray) -> FloatArray:
-        return student_t_logpdf(u, self._cfg.nu)
+        return student_t_logpdf(u, self.config.nu)

@@ -53,9 +53,8 @@ from seatrack.filters.robust import (
 from seatrack.filters.robust_baselines import (
     HuberConfig,
     StudentTConfig,
-    huber_update,
     plain_update,
-    student_t_update,
+    reweighted_update,
 )
 from seatrack.geometry import angle_diff, rotation_to_beam
 from seatrack.models.measurement import polar_measurement
@@ -228,23 +227,25 @@ class RangeBearingEKF(_Sonar):
         return finish_update(state, res.x, res.P, res.nis, res.log_likelihood, state.t, aux, ok)
 
 
-class Huber(RangeBearingEKF):
+class _Reweighted(RangeBearingEKF):
+    """Shared shell of the Huber / Student-t EKFs: :func:`reweighted_update` with the
+    reweighting rule of their configuration."""
+
+    def _update_rule(self) -> Any:
+        return partial(reweighted_update, r_nom=self.r_nom, config=self.config)
+
+
+class Huber(_Reweighted):
     """``--method huber``: Huber M-estimation EKF (``outlier_*``: Huber weight < 1)."""
 
     Config: ClassVar[type] = HuberTrackConfig
 
-    def _update_rule(self) -> Any:
-        return partial(huber_update, r_nom=self.r_nom, config=self.config)
 
-
-class StudentT(RangeBearingEKF):
+class StudentT(_Reweighted):
     """``--method student-t``: VB Student-t EKF (``outlier_*``: expected normalised
     squared residual > ``flag_threshold``)."""
 
     Config: ClassVar[type] = StudentTTrackConfig
-
-    def _update_rule(self) -> Any:
-        return partial(student_t_update, r_nom=self.r_nom, config=self.config)
 
 
 class Robust(_Sonar):

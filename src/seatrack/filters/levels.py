@@ -65,8 +65,8 @@ from seatrack import kalman
 from seatrack.config import param, redefault
 from seatrack.filters.base import (
     CartesianState,
+    ConfiguredFilter,
     Plots,
-    SensorNoise,
     TrackState,
     common_columns,
     finish_update,
@@ -476,7 +476,7 @@ class _Updated:
     outlier: FloatArray
 
 
-class LevelIMM(CartesianState):
+class LevelIMM(ConfiguredFilter, CartesianState):
     """IMM of constant-velocity EKFs with process-noise levels (Gaussian plots).
 
     ``TrackState.x``/``P``: the combined estimate ``[x, y, (z), vx, vy, (vz)]``; ``aux``:
@@ -488,19 +488,8 @@ class LevelIMM(CartesianState):
     Config: ClassVar[type] = LevelIMMConfig
     dims: ClassVar[tuple[int, ...]] = (2, 3)
 
-    def __init__(
-        self,
-        config: Any = None,
-        sensor: SensorNoise | None = None,
-        d: int = 2,
-        range_rate: bool = False,
-    ) -> None:
-        self.config = config if config is not None else self.Config()
-        self.sensor = sensor or SensorNoise()
-        if d not in self.dims:
-            raise ValueError(f"{type(self).__name__} tracks in {self.dims} dimensions, got {d}")
-        self.d = d
-        self.range_rate = bool(range_rate and getattr(self.config, "use_range_rate", False))
+    def _setup(self) -> None:
+        d = self.d
         self.R = measurement_noise(self.sensor, d, self.range_rate)
         self.r = np.ascontiguousarray(np.diagonal(self.R))
         ang = np.zeros(self.r.size)

@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from seatrack import kalman
 from seatrack.config import param
 from seatrack.filters.base import (
+    ConfiguredFilter,
     Plots,
     SensorNoise,
     TrackState,
@@ -138,26 +139,15 @@ def _beam_blocks(P: FloatArray, psi: FloatArray) -> FloatArray:
     return np.einsum("bca,bcd,biajd->bcij", R, R, P.reshape(B, k, 2, k, 2))
 
 
-class _Sonar:
-    """Shared shell of the 2-D sonar filters: layout, initiation, columns."""
+class _Sonar(ConfiguredFilter):
+    """Shared shell of the 2-D sonar filters: layout, initiation, columns (no range rate:
+    the configurations have no ``use_range_rate``)."""
 
     Config: ClassVar[type] = SonarMotionConfig
     dims: ClassVar[tuple[int, ...]] = (2,)
 
-    def __init__(
-        self,
-        config: Any = None,
-        sensor: SensorNoise | None = None,
-        d: int = 2,
-        range_rate: bool = False,
-    ) -> None:
-        if d != 2:
-            raise ValueError(f"{type(self).__name__} tracks in 2-D (d = 2), got d = {d}")
-        self.config = config or self.Config()
-        self.sensor = sensor or SensorNoise()
+    def _setup(self) -> None:
         self.model = self.config.sonar_model(self.sensor)
-        self.d = 2
-        self.range_rate = False
         self.k = self.model.order
         self.r_nom = np.array([self.sensor.sigma_range**2, self.sensor.sigma_azimuth**2])
 

@@ -35,8 +35,7 @@ from seatrack.filters.levels_kernel import Rule
 from seatrack.filters.robust_baselines import (
     HuberConfig,
     StudentTConfig,
-    huber_update,
-    student_t_update,
+    reweighted_update,
 )
 from seatrack.models.measurement import polar_measurement
 from seatrack.models.motion import cv_matrices
@@ -114,13 +113,12 @@ def _reference_update(f: Any, st: Any, plots: Plots) -> dict[str, Any]:
         else:
             it, c, thr = int(f._par[0]), f._par[1], f._par[2]
             zz = np.broadcast_to(z[:, None], hx.shape)
-            if f.rule == Rule.HUBER:
-                res, flags = huber_update(X, PP, zz, hx, H, f.R, f.r, HuberConfig(c, it), False,
-                                          _gauss_update)  # fmt: skip
-            else:
-                cfg = StudentTConfig(nu=c, iterations=it, flag_threshold=thr)
-                res, flags = student_t_update(X, PP, zz, hx, H, f.R, f.r, cfg, False,
-                                              _gauss_update)  # fmt: skip
+            cfg = (
+                HuberConfig(c, it)
+                if f.rule == Rule.HUBER
+                else StudentTConfig(nu=c, iterations=it, flag_threshold=thr)
+            )
+            res, flags = reweighted_update(X, PP, zz, hx, H, f.R, f.r, cfg, False, _gauss_update)
             Xo, Po, out = res.x, res.P, flags.astype(float)
             sv = np.diagonal(H @ PP @ np.swapaxes(H, -1, -2), axis1=-2, axis2=-1) + f.r
             ll = student_t_logpdf(y / np.sqrt(sv), f._par[3]) - 0.5 * np.log(sv).sum(-1)

@@ -14,7 +14,10 @@ File formats: see :mod:`seatrack.io.navigation` and :mod:`seatrack.io.landmarks`
 
 from __future__ import annotations
 
+import functools
+import inspect
 import math
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -86,22 +89,51 @@ def _origin(text: str | None) -> tuple[float, float] | None:
     return lat, lon
 
 
+#: the navigator options of ``navigate`` and ``survey``: (parameter, type, option); the
+#: first five make the :class:`NavigatorConfig` (:func:`_config`, in this order)
+_NAVIGATOR_OPTIONS: tuple[tuple[str, Any, Any], ...] = (
+    ("antenna_period", float,
+     typer.Option(2.5, "--antenna-period", help="Antenna revolution period (s).")),
+    ("range_limit", float,
+     typer.Option(3000.0, "--range-limit", help="Radar range used for the window (m).")),
+    ("antenna_offset", float,
+     typer.Option(0.0, "--antenna-offset", help="Antenna aft of the reference point (m).")),
+    ("method", str, typer.Option("ekf", "--method", help="ekf (Kalman, Joseph) or srif.")),
+    ("clutter_density", float,
+     typer.Option(1e-5, "--clutter-density", help="False echoes per m^2 per revolution (b).")),
+    ("origin", str | None,
+     typer.Option(None, "--origin", help="lat_deg,lon_deg of the local frame, for maps given "
+                  "in lat/lon.")),
+)  # fmt: skip
+
+
+def _with_navigator(command: Callable[..., None]) -> Callable[..., None]:
+    """``command`` with the navigator options as its last CLI parameters: it is called with
+    ``cfg``, the :class:`NavigatorConfig` made of the first five, and ``origin`` (the
+    text of ``--origin``) in their place."""
+    sig = inspect.signature(command)
+    names = {name for name, _, _ in _NAVIGATOR_OPTIONS}
+    own = [p for name, p in sig.parameters.items() if name != "cfg" and name not in names]
+    extra = [
+        inspect.Parameter(name, inspect.Parameter.KEYWORD_ONLY, default=opt, annotation=tp)
+        for name, tp, opt in _NAVIGATOR_OPTIONS
+    ]
+
+    @functools.wraps(command)
+    def run(**kwargs: Any) -> None:
+        cfg = _config(*(kwargs.pop(name) for name, _, _ in _NAVIGATOR_OPTIONS[:5]))
+        command(cfg=cfg, **kwargs)
+
+    run.__signature__ = sig.replace(parameters=own + extra)  # type: ignore[attr-defined]
+    run.__annotations__ = command.__annotations__ | {n: tp for n, tp, _ in _NAVIGATOR_OPTIONS}
+    return run
+
+
 def register(app: typer.Typer) -> None:
     """Add ``navigate`` and ``survey`` to the CLI."""
-    period_opt = typer.Option(2.5, "--antenna-period", help="Antenna revolution period (s).")
-    range_opt = typer.Option(3000.0, "--range-limit", help="Radar range used for the window (m).")
-    offset_opt = typer.Option(
-        0.0, "--antenna-offset", help="Antenna aft of the reference point (m)."
-    )
-    method_opt = typer.Option("ekf", "--method", help="ekf (Kalman, Joseph) or srif.")
-    clutter_opt = typer.Option(
-        1e-5, "--clutter-density", help="False echoes per m^2 per revolution (b)."
-    )
-    origin_opt = typer.Option(
-        None, "--origin", help="lat_deg,lon_deg of the local frame, for maps given in lat/lon."
-    )
 
     @app.command("navigate")
+    @_with_navigator
     def navigate_cmd(
         map_file: Path = typer.Option(
             ..., "--map", help="MAP.csv: id,kind,x_m,y_m,orientation_deg."
@@ -114,19 +146,14 @@ def register(app: typer.Typer) -> None:
             ..., "--start", help="x_m,y_m,heading_deg,speed_mps at the first echo."
         ),
         out: Path = typer.Option(..., "--out", help="NAV.csv to write."),
-        antenna_period: float = period_opt,
-        range_limit: float = range_opt,
-        antenna_offset: float = offset_opt,
-        method: str = method_opt,
-        clutter_density: float = clutter_opt,
-        origin: str | None = origin_opt,
+        origin: str | None = None,
+        cfg: Any = None,
     ) -> None:
         """Own-ship position and heading from radar echoes of mapped landmarks (JP H03-66630)."""
         from seatrack.io.landmarks import read_map_csv
         from seatrack.io.navigation import read_echoes, read_gyro, write_nav
         from seatrack.navigation.navigator import navigate
 
-        cfg = _config(antenna_period, range_limit, antenna_offset, method, clutter_density)
         x0 = parse_start(start)
         org = _origin(origin)
         prepare_outputs([out])
@@ -141,6 +168,7 @@ def register(app: typer.Typer) -> None:
         )
 
     @app.command("survey")
+    @_with_navigator
     def survey_cmd(
         map_file: Path = typer.Option(..., "--map", help="MAP.csv to correct."),
         echoes: list[Path] = typer.Option(
@@ -159,12 +187,8 @@ def register(app: typer.Typer) -> None:
         min_visibility: float = typer.Option(
             0.5, "--min-visibility", help="Flag below this hit fraction."
         ),
-        antenna_period: float = period_opt,
-        range_limit: float = range_opt,
-        antenna_offset: float = offset_opt,
-        method: str = method_opt,
-        clutter_density: float = clutter_opt,
-        origin: str | None = origin_opt,
+        origin: str | None = None,
+        cfg: Any = None,
     ) -> None:
         """Correct a landmark map from recorded passages; flag poorly visible landmarks."""
         from seatrack.io.landmarks import read_map_csv, write_map_csv
@@ -172,7 +196,6 @@ def register(app: typer.Typer) -> None:
         from seatrack.navigation.navigator import navigate
         from seatrack.navigation.survey import SurveyConfig, survey
 
-        cfg = _config(antenna_period, range_limit, antenna_offset, method, clutter_density)
         option_in("--min-visibility", min_visibility, 0.0, 1.0)
         x0s = [parse_start(s) for s in start]
         org = _origin(origin)

@@ -33,7 +33,7 @@ import dataclasses
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from enum import IntEnum
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -70,6 +70,7 @@ __all__ = [
     "run_tracks",
     "COMMON_COLUMNS",
     "CartesianState",
+    "ConfiguredFilter",
     "STATE_COLUMNS",
 ]
 
@@ -398,6 +399,36 @@ class CartesianState:
     @property
     def state_names(self) -> tuple[str, ...]:
         return cartesian_names(self.d)
+
+
+class ConfiguredFilter:
+    """The constructor ``(config, sensor, d, range_rate)`` of a registered method: the
+    configuration (default ``Config()``) and the plots' measurement noise (default
+    :class:`SensorNoise`), ``d`` checked against ``dims``, range rate used when the plots
+    carry it and the configuration's ``use_range_rate`` (if it has one) says so; then
+    :meth:`_setup` builds the method's own fields."""
+
+    Config: ClassVar[type]
+    #: plot dimensions the method handles
+    dims: ClassVar[tuple[int, ...]] = (2, 3)
+
+    def __init__(
+        self,
+        config: Any = None,
+        sensor: SensorNoise | None = None,
+        d: int = 2,
+        range_rate: bool = False,
+    ) -> None:
+        if d not in self.dims:
+            raise ValueError(f"{type(self).__name__} tracks in {self.dims} dimensions, got {d}")
+        self.config: Any = config if config is not None else self.Config()
+        self.sensor = sensor or SensorNoise()
+        self.d = d
+        self.range_rate = bool(range_rate and getattr(self.config, "use_range_rate", False))
+        self._setup()
+
+    def _setup(self) -> None:
+        """The method's fields, from ``config``, ``sensor``, ``d`` and ``range_rate``."""
 
 
 def converted_positions(

@@ -10,7 +10,7 @@ measurements are used in their native polar form (range, azimuth, [elevation],
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -19,8 +19,8 @@ from seatrack import kalman
 from seatrack.config import param
 from seatrack.filters.base import (
     CartesianState,
+    ConfiguredFilter,
     Plots,
-    SensorNoise,
     TrackState,
     common_columns,
     finish_update,
@@ -67,7 +67,7 @@ class EKFConfig:
         return cls(q=0.0, sigma_accel=target.accel_typical, initial_speed_sigma=target.speed_max)
 
 
-class EKF(CartesianState):
+class EKF(ConfiguredFilter, CartesianState):
     """Constant-velocity extended Kalman filter on polar plots (the reference filter).
 
     State ``[x, y, (z), vx, vy, (vz)]`` (m, m/s); continuous white-noise acceleration with
@@ -84,22 +84,11 @@ class EKF(CartesianState):
     """
 
     Config = EKFConfig
-    #: plot dimensions the filter handles (3-D plots are tracked in 3-D)
-    dims: ClassVar[tuple[int, ...]] = (2, 3)
+    config: EKFConfig
 
-    def __init__(
-        self,
-        config: EKFConfig | None = None,
-        sensor: SensorNoise | None = None,
-        d: int = 2,
-        range_rate: bool = False,
-    ) -> None:
-        self.config = config or EKFConfig()
-        self.sensor = sensor or SensorNoise()
-        self.d = d
-        self.range_rate = bool(range_rate and self.config.use_range_rate)
-        self.model = measurement_model(d, 2 * d, self.range_rate)
-        self.R = measurement_noise(self.sensor, d, self.range_rate)
+    def _setup(self) -> None:
+        self.model = measurement_model(self.d, 2 * self.d, self.range_rate)
+        self.R = measurement_noise(self.sensor, self.d, self.range_rate)
         self._angular = self.model.angular.astype(float)
 
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:

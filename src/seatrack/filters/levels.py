@@ -32,10 +32,11 @@ the model probabilities:
   agile level within a few scans;
 * ``ramazanov`` -- algorithm R's robust variance per channel (``r_c <- y_c^2 / Delta_c -
   (H P H^T)_cc`` when ``J_c = y_c^2 / S_cc > Delta_c``), likelihood the contaminated one;
-* ``huber`` -- Huber's IRLS update (:func:`seatrack.filters.robust_baselines.huber_update`),
-  likelihood Huber's least favourable density of the whitened innovation components;
-* ``student-t`` -- the VB Student-t update
-  (:func:`seatrack.filters.robust_baselines.student_t_update`), likelihood the Student-t
+* ``huber`` -- Huber's IRLS update (:func:`seatrack.filters.robust_baselines.reweighted_update`
+  with a :class:`~seatrack.filters.robust_baselines.HuberConfig`), likelihood the Student-t
+  density of the whitened innovation components (see :class:`HuberLevels`);
+* ``student-t`` -- the VB Student-t update (the same function with a
+  :class:`~seatrack.filters.robust_baselines.StudentTConfig`), likelihood the Student-t
   density of each innovation component.
 
 Every scan of a batch of tracks is three compiled calls (:mod:`seatrack.filters.levels_kernel`):
@@ -62,8 +63,8 @@ from seatrack import kalman
 from seatrack.config import param, redefault
 from seatrack.filters.base import (
     CartesianState,
+    ConfiguredFilter,
     Plots,
-    SensorNoise,
     TrackState,
     common_columns,
     finish_update,
@@ -366,7 +367,7 @@ def _hph(H: FloatArray, P: FloatArray) -> FloatArray:
 # ---------------------------------------------------------------------------
 # The filter on the contract
 # ---------------------------------------------------------------------------
-class LevelIMM(CartesianState):
+class LevelIMM(ConfiguredFilter, CartesianState):
     """IMM of constant-velocity EKFs with process-noise levels (Gaussian plots).
 
     ``TrackState.x``/``P``: the combined estimate ``[x, y, (z), vx, vy, (vz)]``; ``aux``:
@@ -381,19 +382,8 @@ class LevelIMM(CartesianState):
     #: update under Gaussian or, with an outlier probability, contaminated plot noise
     rule: ClassVar[Rule] = Rule.MIXTURE
 
-    def __init__(
-        self,
-        config: Any = None,
-        sensor: SensorNoise | None = None,
-        d: int = 2,
-        range_rate: bool = False,
-    ) -> None:
-        self.config = config if config is not None else self.Config()
-        self.sensor = sensor or SensorNoise()
-        if d not in self.dims:
-            raise ValueError(f"{type(self).__name__} tracks in {self.dims} dimensions, got {d}")
-        self.d = d
-        self.range_rate = bool(range_rate and getattr(self.config, "use_range_rate", False))
+    def _setup(self) -> None:
+        d = self.d
         self.R = measurement_noise(self.sensor, d, self.range_rate)
         self.r = np.ascontiguousarray(np.diagonal(self.R))
         ang = np.zeros(self.r.size)
@@ -593,7 +583,7 @@ def _t_log_norm(nu: float) -> float:
 
 class HuberLevels(LevelIMM):
     """``--method huber``: level IMM with Huber's IRLS update
-    (:func:`seatrack.filters.robust_baselines.huber_update`, compiled in
+    (:func:`seatrack.filters.robust_baselines.reweighted_update`, compiled in
     :mod:`seatrack.filters.levels_kernel`); level likelihood Student-t (``level_nu``) of
     the whitened innovation, not Huber's least favourable density: its Laplace tails let a
     gross outlier vote ~7 nats for a level twice as wide (the IMM went agile, 20 m/s
@@ -612,7 +602,7 @@ class HuberLevels(LevelIMM):
 
 class StudentTLevels(LevelIMM):
     """``--method student-t``: level IMM with the VB Student-t update
-    (:func:`seatrack.filters.robust_baselines.student_t_update`, per channel, compiled in
+    (:func:`seatrack.filters.robust_baselines.reweighted_update`, per channel, compiled in
     :mod:`seatrack.filters.levels_kernel`); level likelihood the Student-t density of each
     whitened innovation component."""
 

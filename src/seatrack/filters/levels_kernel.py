@@ -15,8 +15,8 @@ One scan of the level IMM for a whole batch of tracks is three calls:
 The arithmetic is that of the NumPy composition they replace (:func:`mixture_core` is the
 update of :func:`seatrack.filters.levels.mixture_update`; the mixing and combination are
 :func:`seatrack.filters.imm.mix_core` and :func:`~seatrack.filters.imm.combine_core`; the
-reweighting is :func:`seatrack.filters.robust_baselines.huber_update` /
-:func:`~seatrack.filters.robust_baselines.student_t_update` with a diagonal ``R``):
+reweighting is :func:`seatrack.filters.robust_baselines.reweighted_update` with a
+diagonal ``R``):
 ``tests/filters/test_levels_kernel.py`` checks them against it. A non-positive-definite
 innovation covariance gives NaN, which the caller rejects.
 """

@@ -29,7 +29,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -57,8 +57,7 @@ __all__ = [
     "huber_filter",
     "student_t_filter",
     "plain_update",
-    "huber_update",
-    "student_t_update",
+    "reweighted_update",
 ]
 
 _ANGULAR = np.array([False, True])
@@ -84,12 +83,23 @@ class HuberConfig:
 
     c: float = 1.345
     iterations: int = 5
+    #: the first weights come from the innovation itself (:func:`reweighted_update`)
+    prior_first: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         if not np.isfinite(self.c) or self.c <= 0:
             raise ValueError(f"c must be a positive number, got {self.c}")
         if int(self.iterations) != self.iterations or self.iterations < 1:
             raise ValueError(f"iterations must be a positive integer, got {self.iterations}")
+
+    def weights(
+        self, e: FloatArray, H: FloatArray, P: FloatArray, r_nom: FloatArray
+    ) -> tuple[FloatArray, NDArray[np.bool_]]:
+        """Huber weights ``w = min(1, c / |u|)`` of the whitened residuals
+        ``u = e / sqrt(r_nom)``, and the flags ``w < 1`` (``H``, ``P``: unused)."""
+        u = np.abs(e) / np.sqrt(r_nom)
+        w = np.minimum(1.0, self.c / np.maximum(u, 1e-300))
+        return w, w < 1.0
 
 
 @dataclass(frozen=True)
@@ -114,12 +124,32 @@ class StudentTConfig:
     iterations: int = 5
     per_component: bool = True
     flag_threshold: float = 6.63
+    #: the first weights come from the residual at the plain update (:func:`reweighted_update`)
+    prior_first: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
         if not np.isfinite(self.nu) or self.nu <= 0:
             raise ValueError(f"nu must be a positive number, got {self.nu}")
         if int(self.iterations) != self.iterations or self.iterations < 1:
             raise ValueError(f"iterations must be a positive integer, got {self.iterations}")
+
+    def weights(
+        self, e: FloatArray, H: FloatArray, P: FloatArray, r_nom: FloatArray
+    ) -> tuple[FloatArray, NDArray[np.bool_]]:
+        """VB scale weights ``E[lambda] = (nu + m) / (nu + tr(R^-1 A))``, ``A = e e^T +
+        H P H^T`` (``P`` the current posterior), per component or for the vector, and the
+        flags ``E[e^2] / r > flag_threshold``."""
+        hph = np.einsum("...ij,...jk,...ik->...i", H, P, H)
+        a = (e**2 + hph) / r_nom
+        if self.per_component:
+            lam = (self.nu + 1.0) / (self.nu + a)
+        else:
+            lam = np.repeat(((self.nu + 2.0) / (self.nu + a.sum(-1)))[..., None], 2, -1)
+        return lam, a > self.flag_threshold
+
+
+#: a reweighting rule of :func:`reweighted_update`
+Reweighting = HuberConfig | StudentTConfig
 
 
 def _nominal_r(model: SonarModel) -> FloatArray:
@@ -253,6 +283,14 @@ def clairvoyant_filter(
     return TrackEstimates(est.x, est.P, mask.copy(), est.adapting)
 
 
+def _reweighted_filter(
+    t: ArrayLike, z: ArrayLike, sensor: ArrayLike, model: SonarModel | None, config: Reweighting
+) -> TrackEstimates:
+    """The EKF of :func:`_run_ekf` with :func:`reweighted_update` by ``config``."""
+    m = model or SonarModel()
+    return _run_ekf(t, z, sensor, m, partial(reweighted_update, r_nom=_nominal_r(m), config=config))
+
+
 def huber_filter(
     t: ArrayLike,
     z: ArrayLike,
@@ -271,61 +309,7 @@ def huber_filter(
     covariance is the Joseph-form covariance of the last step. ``outlier`` flags the
     components with final weight < 1.
     """
-    m = model or SonarModel()
-    cfg = config or HuberConfig()
-    r_nom = _nominal_r(m)
-    return _run_ekf(t, z, sensor, m, partial(huber_update, r_nom=r_nom, config=cfg))
-
-
-def _reweighted(
-    x: FloatArray,
-    P: FloatArray,
-    zn: FloatArray,
-    hx: FloatArray,
-    H: FloatArray,
-    R: FloatArray,
-    r_nom: FloatArray,
-    iterations: int,
-    weights: Callable[[FloatArray, UpdateResult], tuple[FloatArray, NDArray[np.bool_]]],
-    prior_first: bool,
-    check: bool,
-    update: Callable[..., Any] = extended_update,
-) -> tuple[UpdateResult, NDArray[np.bool_]]:
-    """Iteratively reweighted EKF update: ``R = diag(r_nom / w)`` with weights ``w`` from the
-    residuals ``e`` (the innovation first when ``prior_first``, else the residual at the
-    plain update's estimate); returns the last update and the last weights' flags.
-    ``update`` is the Kalman update used (signature and result fields ``x``, ``P``, ``y`` of
-    :func:`seatrack.kalman.extended_update`)."""
-    res = update(x, P, zn, hx, H, R, _ANGULAR, check)
-    y = res.y  # innovation (bearing wrapped)
-    flags = np.zeros(x.shape[:-1] + (2,), dtype=bool)
-    for i in range(iterations):
-        e = y if (prior_first and i == 0) else y - np.einsum("...ij,...j->...i", H, res.x - x)
-        w, flags = weights(e, res)
-        res = update(x, P, zn, hx, H, _diag(r_nom / w), _ANGULAR, check)
-    return res, flags
-
-
-def huber_update(
-    x: FloatArray,
-    P: FloatArray,
-    zn: FloatArray,
-    hx: FloatArray,
-    H: FloatArray,
-    R: FloatArray,
-    r_nom: FloatArray,
-    config: HuberConfig,
-    check: bool = True,
-    update: Callable[..., Any] = extended_update,
-) -> tuple[UpdateResult, NDArray[np.bool_]]:
-    """The Huber IRLS measurement update of :func:`huber_filter` (flags: weight < 1)."""
-
-    def weights(e: FloatArray, _: UpdateResult) -> tuple[FloatArray, NDArray[np.bool_]]:
-        u = np.abs(e) / np.sqrt(r_nom)
-        w = np.minimum(1.0, config.c / np.maximum(u, 1e-300))
-        return w, w < 1.0
-
-    return _reweighted(x, P, zn, hx, H, R, r_nom, config.iterations, weights, True, check, update)
+    return _reweighted_filter(t, z, sensor, model, config or HuberConfig())
 
 
 def student_t_filter(
@@ -341,14 +325,13 @@ def student_t_filter(
     The mean-field VB fixed point alternates the Kalman update with ``R / E[lambda]`` and
     ``E[lambda] = (nu + m) / (nu + tr(R^-1 A))`` where ``A = E[e e^T] = e e^T + H P H^T`` is
     the expected squared residual at the posterior (``m`` = 1 per component when
-    ``per_component``, else 2 for the vector).
+    ``per_component``, else 2 for the vector). ``outlier`` flags the components whose
+    expected normalised squared residual exceeds ``flag_threshold``.
     """
-    m = model or SonarModel()
-    cfg = config or StudentTConfig()
-    return _run_ekf(t, z, sensor, m, partial(student_t_update, r_nom=_nominal_r(m), config=cfg))
+    return _reweighted_filter(t, z, sensor, model, config or StudentTConfig())
 
 
-def student_t_update(
+def reweighted_update(
     x: FloatArray,
     P: FloatArray,
     zn: FloatArray,
@@ -356,21 +339,24 @@ def student_t_update(
     H: FloatArray,
     R: FloatArray,
     r_nom: FloatArray,
-    config: StudentTConfig,
+    config: Reweighting,
     check: bool = True,
     update: Callable[..., Any] = extended_update,
 ) -> tuple[UpdateResult, NDArray[np.bool_]]:
-    """The VB Student-t measurement update of :func:`student_t_filter` (flags: expected
-    normalised squared residual > ``flag_threshold``)."""
-    nu = config.nu
+    """Iteratively reweighted EKF update (the Huber IRLS update of :func:`huber_filter` or
+    the VB Student-t update of :func:`student_t_filter`, by the type of ``config``).
 
-    def weights(e: FloatArray, res: UpdateResult) -> tuple[FloatArray, NDArray[np.bool_]]:
-        hph = np.einsum("...ij,...jk,...ik->...i", H, res.P, H)
-        a = (e**2 + hph) / r_nom
-        if config.per_component:
-            lam = (nu + 1.0) / (nu + a)
-        else:
-            lam = np.repeat(((nu + 2.0) / (nu + a.sum(-1)))[..., None], 2, -1)
-        return lam, a > config.flag_threshold
-
-    return _reweighted(x, P, zn, hx, H, R, r_nom, config.iterations, weights, False, check, update)
+    ``config.iterations`` times: weights ``w`` and flags from the residuals ``e`` by
+    ``config.weights`` (the innovation first when ``config.prior_first``, else the residual
+    at the current estimate), then the update with ``R = diag(r_nom / w)``; returns the last
+    update and the last weights' flags. ``update`` is the Kalman update used (signature and
+    result fields ``x``, ``P``, ``y`` of :func:`seatrack.kalman.extended_update`)."""
+    res = update(x, P, zn, hx, H, R, _ANGULAR, check)
+    y = res.y  # innovation (bearing wrapped)
+    flags = np.zeros(x.shape[:-1] + (2,), dtype=bool)
+    for i in range(config.iterations):
+        first = config.prior_first and i == 0
+        e = y if first else y - np.einsum("...ij,...j->...i", H, res.x - x)
+        w, flags = config.weights(e, H, res.P, r_nom)
+        res = update(x, P, zn, hx, H, _diag(r_nom / w), _ANGULAR, check)
+    return res, flags

@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from seatrack import kalman
 from seatrack.config import param
 from seatrack.filters.base import (
+    ConfiguredFilter,
     Plots,
     SensorNoise,
     TrackState,
@@ -53,9 +54,8 @@ from seatrack.filters.robust import (
 from seatrack.filters.robust_baselines import (
     HuberConfig,
     StudentTConfig,
-    huber_update,
     plain_update,
-    student_t_update,
+    reweighted_update,
 )
 from seatrack.geometry import angle_diff, rotation_to_beam
 from seatrack.models.measurement import polar_measurement
@@ -139,26 +139,15 @@ def _beam_blocks(P: FloatArray, psi: FloatArray) -> FloatArray:
     return np.einsum("bca,bcd,biajd->bcij", R, R, P.reshape(B, k, 2, k, 2))
 
 
-class _Sonar:
-    """Shared shell of the 2-D sonar filters: layout, initiation, columns."""
+class _Sonar(ConfiguredFilter):
+    """Shared shell of the 2-D sonar filters: layout, initiation, columns (no range rate:
+    the configurations have no ``use_range_rate``)."""
 
     Config: ClassVar[type] = SonarMotionConfig
     dims: ClassVar[tuple[int, ...]] = (2,)
 
-    def __init__(
-        self,
-        config: Any = None,
-        sensor: SensorNoise | None = None,
-        d: int = 2,
-        range_rate: bool = False,
-    ) -> None:
-        if d != 2:
-            raise ValueError(f"{type(self).__name__} tracks in 2-D (d = 2), got d = {d}")
-        self.config = config or self.Config()
-        self.sensor = sensor or SensorNoise()
+    def _setup(self) -> None:
         self.model = self.config.sonar_model(self.sensor)
-        self.d = 2
-        self.range_rate = False
         self.k = self.model.order
         self.r_nom = np.array([self.sensor.sigma_range**2, self.sensor.sigma_azimuth**2])
 
@@ -228,23 +217,25 @@ class RangeBearingEKF(_Sonar):
         return finish_update(state, res.x, res.P, res.nis, res.log_likelihood, state.t, aux, ok)
 
 
-class Huber(RangeBearingEKF):
+class _Reweighted(RangeBearingEKF):
+    """Shared shell of the Huber / Student-t EKFs: :func:`reweighted_update` with the
+    reweighting rule of their configuration."""
+
+    def _update_rule(self) -> Any:
+        return partial(reweighted_update, r_nom=self.r_nom, config=self.config)
+
+
+class Huber(_Reweighted):
     """``--method huber``: Huber M-estimation EKF (``outlier_*``: Huber weight < 1)."""
 
     Config: ClassVar[type] = HuberTrackConfig
 
-    def _update_rule(self) -> Any:
-        return partial(huber_update, r_nom=self.r_nom, config=self.config)
 
-
-class StudentT(RangeBearingEKF):
+class StudentT(_Reweighted):
     """``--method student-t``: VB Student-t EKF (``outlier_*``: expected normalised
     squared residual > ``flag_threshold``)."""
 
     Config: ClassVar[type] = StudentTTrackConfig
-
-    def _update_rule(self) -> Any:
-        return partial(student_t_update, r_nom=self.r_nom, config=self.config)
 
 
 class Robust(_Sonar):

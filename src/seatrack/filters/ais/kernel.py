@@ -153,13 +153,13 @@ _LOG_2PI = math.log(2.0 * math.pi)  # 2-D Gaussian: -0.5 (d2 + log det S) - log(
 
 
 @njit(cache=True)
-def _close(
-    k0, k1, a, xp, Pp, Fk, xf, Pf, xs, Ps, has, smooth, out_x, out_std, std
-):  # pragma: no cover
-    """Smooth scratch rows ``k0..k1`` (inclusive) of the vessel starting at row ``a``; write
-    the state, the 1-sigma of :func:`derived_std` and (last column) the x-y covariance."""
+def _close(k0, k1, a, rows, xs, Ps, has, smooth, out_x, out_std, std):  # pragma: no cover
+    """Smooth scratch rows ``k0..k1`` (inclusive) of the vessel starting at row ``a``
+    (``rows``: the filter rows ``(xp, Pp, Fk, xf, Pf)``); write the state, the 1-sigma of
+    :func:`derived_std` and (last column) the x-y covariance."""
     if k1 < k0:
         return
+    xp, Pp, Fk, xf, Pf = rows
     smooth_segment(k0, k1, xp, Pp, Fk, xf, Pf, xs, Ps, has, smooth)
     for kk in range(k0, k1 + 1):
         if has[kk]:
@@ -173,14 +173,15 @@ def _close(
 
 
 @njit(cache=True)
-def _init_at(
-    k, z, v0, known, v_std, v_std_known, sig, toff, w_std, xp, Pp, Fk, xf, Pf
-):  # pragma: no cover
-    """Initialise a segment in scratch row ``k`` from one report: position ``z`` (moved on
-    by ``v0 toff`` for a report stamped ``toff`` seconds late), velocity ``v0`` (from
-    SOG/COG) if ``known`` else zero, with the matching prior sigmas; position covariance =
-    the report's measurement noise ``sig = (sigma_pos, sigma_time)`` (m, s), see
-    :func:`position_noise`."""
+def _init_at(k, z, v0, known, sig, toff, prior, rows):  # pragma: no cover
+    """Initialise a segment in scratch row ``k`` of the filter rows ``(xp, Pp, Fk, xf, Pf)``
+    from one report: position ``z`` (moved on by ``v0 toff`` for a report stamped ``toff``
+    seconds late), velocity ``v0`` (from SOG/COG) if ``known`` else zero, with the matching
+    prior sigma of ``prior = (v_std, v_std_known, w_std)`` (m/s, m/s, rad/s); position
+    covariance = the report's measurement noise ``sig = (sigma_pos, sigma_time)`` (m, s),
+    see :func:`position_noise`."""
+    v_std, v_std_known, w_std = prior
+    xp, Pp, Fk, xf, Pf = rows
     vx = v0[0] if known else 0.0
     vy = v0[1] if known else 0.0
     sv = v_std_known if known else v_std
@@ -288,6 +289,8 @@ def _track_flat(
     K1 = np.empty((NX, 1))
     xv = np.empty(NX)
     Pv = np.empty((NX, NX))
+    rows = (xp, Pp, Fk, xf, Pf)  # the filter rows a segment starts in and the smoother reads
+    prior = (init_v_std, init_v_std_known, init_w_std)
     noise_dist = nsig * math.sqrt(2.0) * sigma_pos  # noise allowance on a distance
     seg_id = 0
     for v in range(v_lo, v_hi):
@@ -347,15 +350,11 @@ def _track_flat(
                     out_flag[i] = OutlierKind.IMPLAUSIBLE_AFTER_GAP
                     # the row gets no estimate (the track is not propagated over the gap)
                     continue
-                _close(
-                    k_first, k - 1, a, xp, Pp, Fk, xf, Pf, xs, Ps, has, smooth, out_x, out_std, std
-                )
+                _close(k_first, k - 1, a, rows, xs, Ps, has, smooth, out_x, out_std, std)
                 init = False
             elif init and t[i] - t_state > max_gap:
                 # withheld row after a long gap: end the segment, no estimate for the row
-                _close(
-                    k_first, k - 1, a, xp, Pp, Fk, xf, Pf, xs, Ps, has, smooth, out_x, out_std, std
-                )
+                _close(k_first, k - 1, a, rows, xs, Ps, has, smooth, out_x, out_std, std)
                 init = False
                 continue
             if not init:
@@ -365,22 +364,7 @@ def _track_flat(
                 init = True
                 k_first = k
                 n_out = 0
-                _init_at(
-                    k,
-                    z[i],
-                    v0[i],
-                    v0_known[i],
-                    init_v_std,
-                    init_v_std_known,
-                    sig[i],
-                    toff[i],
-                    init_w_std,
-                    xp,
-                    Pp,
-                    Fk,
-                    xf,
-                    Pf,
-                )
+                _init_at(k, z[i], v0[i], v0_known[i], sig[i], toff[i], prior, rows)
                 t_state = t[i]
                 last_t = t[i]
                 last_x = z[i, 0]
@@ -448,42 +432,11 @@ def _track_flat(
                     n_out += 1
                     if n_out >= reinit_after:
                         # track lost: close the segment before i, restart at i
-                        _close(
-                            k_first,
-                            k - 1,
-                            a,
-                            xp,
-                            Pp,
-                            Fk,
-                            xf,
-                            Pf,
-                            xs,
-                            Ps,
-                            has,
-                            smooth,
-                            out_x,
-                            out_std,
-                            std,
-                        )
+                        _close(k_first, k - 1, a, rows, xs, Ps, has, smooth, out_x, out_std, std)
                         seg_id = i
                         k_first = k
                         n_out = 0
-                        _init_at(
-                            k,
-                            z[i],
-                            v0[i],
-                            v0_known[i],
-                            init_v_std,
-                            init_v_std_known,
-                            sig[i],
-                            toff[i],
-                            init_w_std,
-                            xp,
-                            Pp,
-                            Fk,
-                            xf,
-                            Pf,
-                        )
+                        _init_at(k, z[i], v0[i], v0_known[i], sig[i], toff[i], prior, rows)
                         last_t = t[i]
                         last_x = z[i, 0]
                         last_y = z[i, 1]
@@ -530,9 +483,7 @@ def _track_flat(
             last_x = z[i, 0]
             last_y = z[i, 1]
         if init:
-            _close(
-                k_first, b - a - 1, a, xp, Pp, Fk, xf, Pf, xs, Ps, has, smooth, out_x, out_std, std
-            )
+            _close(k_first, b - a - 1, a, rows, xs, Ps, has, smooth, out_x, out_std, std)
 
 
 @njit(cache=True, nogil=True)

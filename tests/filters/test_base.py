@@ -11,9 +11,9 @@ from seatrack.filters.base import (
     common_columns,
     finish_update,
     plot_gaussian,
-    run_tracks,
     two_point_gaussian,
 )
+from seatrack.filters.driver import run_tracks
 from seatrack.filters.ekf import EKF, EKFConfig
 
 

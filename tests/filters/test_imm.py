@@ -181,7 +181,8 @@ def _turn_plots(seed: int = 0):
 
 
 def _run(flt, plots, speed=30.0):
-    from seatrack.filters.base import SensorNoise, plot_gaussian, run_tracks
+    from seatrack.filters.base import SensorNoise, plot_gaussian
+    from seatrack.filters.driver import run_tracks
 
     sensor = SensorNoise(10.0, 0.002)
     return run_tracks(

@@ -14,7 +14,8 @@ from scipy import integrate, stats
 
 from seatrack.config import ConfigError, parse_config
 from seatrack.filters import registry
-from seatrack.filters.base import Plots, SensorNoise, plot_gaussian, run_tracks
+from seatrack.filters.base import Plots, SensorNoise, plot_gaussian
+from seatrack.filters.driver import run_tracks
 from seatrack.filters.levels import (
     LADDER,
     ContaminatedConfig,

@@ -8,7 +8,8 @@ import math
 import numpy as np
 
 from seatrack import kalman
-from seatrack.filters.base import Plots, SensorNoise, plot_gaussian, run_tracks
+from seatrack.filters.base import Plots, SensorNoise, plot_gaussian
+from seatrack.filters.driver import run_tracks
 from seatrack.filters.ekf import EKF, EKFConfig
 from seatrack.filters.smooth import rts_smooth, smooth_track
 from seatrack.models.motion import cv_noise, cv_transition

@@ -23,8 +23,9 @@ covariance is not positive definite, or that would give a non-finite state, leav
 track at its prediction with status :attr:`PlotStatus.REJECTED`; the other tracks of the
 batch are updated normally (:func:`finish_update`).
 
-The driver :func:`run_tracks` runs a filter over every labelled track of a file at once:
-step ``k`` processes the ``k``-th plot of all tracks that have one, as one batch.
+The driver :func:`seatrack.filters.driver.run_tracks` runs a filter over every labelled
+track of a file at once: step ``k`` processes the ``k``-th plot of all tracks that have one,
+as one batch.
 """
 
 from __future__ import annotations
@@ -67,7 +68,6 @@ __all__ = [
     "predicted",
     "step_times",
     "wrap_angles",
-    "run_tracks",
     "COMMON_COLUMNS",
     "CartesianState",
     "ConfiguredFilter",
@@ -85,9 +85,9 @@ class PlotStatus(IntEnum):
     """What happened to a track at a plot (the ``status`` output column)."""
 
     UPDATED = 0  #: the plot updated the track
-    INITIATED = 1  #: the track was started on this plot
+    INITIATED = 1  #: the track was started (or restarted) on this plot
     PREDICTED = 2  #: no plot: prediction only (coasting)
-    REJECTED = 3  #: the plot was unusable; the track kept its prediction
+    REJECTED = 3  #: the plot was unusable or a gross error; the track kept its prediction
 
     @property
     def label(self) -> str:
@@ -682,100 +682,6 @@ def finish_update(
         return new
     kept = prior.replace(nis=nan, log_likelihood=nan.copy(), status=status, t=new.t)
     return kept.where(good, new)
-
-
-def run_tracks(
-    flt: RecursiveFilter,
-    plots: Plots,
-    track_index: IntArray,
-    initiate: Callable[[Plots], tuple[FloatArray, FloatArray]],
-) -> dict[str, NDArray[Any]]:
-    """Run ``flt`` over labelled tracks, all tracks as one batch per step.
-
-    Parameters
-    ----------
-    flt : any :class:`RecursiveFilter`.
-    plots : all plots of a file; the plots of each track in time order.
-    track_index : (N,) int -- track number ``0..T-1`` of each plot.
-    initiate : plots -> Cartesian ``(x, P)`` of the first plot of each track
-        (e.g. ``lambda p: plot_gaussian(p, sensor, speed_sigma)``).
-
-    Returns
-    -------
-    Output columns, one value per plot in the input order: ``flt.columns`` plus ``status``
-    (a :class:`PlotStatus` label) and ``nis``.
-    """
-    N = len(plots)
-    if N == 0:
-        return {}
-    ti = np.asarray(track_index, dtype=np.int64)
-    T = int(ti.max()) + 1
-    # rank of each plot within its track (stable: input order)
-    order = np.argsort(ti, kind="stable")
-    starts = np.searchsorted(ti[order], np.arange(T))
-    rank = np.empty(N, np.int64)
-    rank[order] = np.arange(N) - starts[ti[order]]
-    by_rank = np.argsort(rank, kind="stable")
-    bounds = np.searchsorted(rank[by_rank], np.arange(int(rank.max()) + 2))
-    out: dict[str, NDArray[Any]] = {}
-    ids = np.arange(T)
-    rows = by_rank[bounds[0] : bounds[1]]  # the first plot of every track
-    state = _start(flt, initiate, plots.take(rows[np.argsort(ti[rows])]))
-    _emit(flt, state, rows[np.argsort(ti[rows])], out, N)
-    started = state.status == PlotStatus.INITIATED
-    for k in range(1, bounds.size - 1):
-        rows = by_rank[bounds[k] : bounds[k + 1]]
-        tracks = ti[rows]
-        pk = plots.take(rows)
-        if tracks.size == T and started.all() and np.array_equal(tracks, ids):
-            state = flt.update(flt.predict(state, pk.t), pk)  # every track, in order
-            _emit(flt, state, rows, out, N)
-            continue
-        new = ~started[tracks]
-        if new.any():  # tracks whose start was rejected: start again on this plot
-            s = _start(flt, initiate, pk.take(new))
-            state = state.put(tracks[new], s)
-            started[tracks[new]] = s.status == PlotStatus.INITIATED
-            _emit(flt, s, rows[new], out, N)
-        run = ~new
-        if run.any():
-            s = flt.update(flt.predict(state.take(tracks[run]), pk.t[run]), pk.take(run))
-            state = state.put(tracks[run], s)
-            _emit(flt, s, rows[run], out, N)
-    labels = np.array([s.label for s in PlotStatus])
-    out["status"] = labels[out["status"]]
-    return out
-
-
-def _start(
-    flt: RecursiveFilter,
-    initiate: Callable[[Plots], tuple[FloatArray, FloatArray]],
-    plots: Plots,
-) -> TrackState:
-    """Initiate tracks on plots; a plot that gives a non-finite start is REJECTED (the
-    track starts on its next plot)."""
-    with np.errstate(all="ignore"):
-        x0, P0 = initiate(plots)
-    s = flt.initiate(plots.t, x0, P0)
-    ok = np.isfinite(s.x).all(-1) & np.isfinite(s.P).all((-1, -2))
-    if ok.all():
-        return s
-    status = np.where(ok, PlotStatus.INITIATED, PlotStatus.REJECTED).astype(np.int8)
-    return s.replace(status=status)
-
-
-def _emit(
-    flt: RecursiveFilter, s: TrackState, rows: IntArray, out: dict[str, NDArray[Any]], N: int
-) -> None:
-    """Write the output columns of batch ``s`` at ``rows``."""
-    cols = flt.columns(s)
-    cols["status"] = s.status
-    cols["nis"] = s.nis
-    for name, v in cols.items():
-        arr = out.get(name)
-        if arr is None:
-            arr = out[name] = np.empty(N, dtype=np.asarray(v).dtype)
-        arr[rows] = v
 
 
 def check_finite_state(state: TrackState) -> bool:

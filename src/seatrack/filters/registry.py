@@ -13,8 +13,10 @@ Every method is a class honouring :class:`seatrack.filters.base.RecursiveFilter`
 :func:`build` turns a configuration table (a parsed TOML file: flat method keys plus the
 sensor keys, flat or in a ``[sensor]`` table) into a ready :class:`Method`, :func:`run` runs
 one over every labelled track of a set of plots, all tracks as one batch per step
-(:func:`seatrack.filters.base.run_tracks`). Methods are imported lazily by module path so
-that ``--help`` stays fast.
+(:func:`seatrack.filters.driver.run_tracks`; plots beyond a NIS of
+:data:`~seatrack.filters.driver.GROSS_NIS` are rejected as gross errors, except by the
+``-spec`` methods, which run as their sources describe). Methods are imported lazily by
+module path so that ``--help`` stays fast.
 
 The sensor section (:class:`~seatrack.filters.base.SensorNoise`) is shared by every
 method with one documented default; so is the ``target`` key (``ship``, ``submarine``,
@@ -29,6 +31,7 @@ the sensor drives any method.
 from __future__ import annotations
 
 import importlib
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -43,8 +46,8 @@ from seatrack.filters.base import (
     RecursiveFilter,
     SensorNoise,
     plot_gaussian,
-    run_tracks,
 )
+from seatrack.filters.driver import GROSS_NIS, run_tracks
 
 if TYPE_CHECKING:
     from seatrack.models.targets import TargetClass
@@ -259,7 +262,8 @@ def run(
     labels = plots.track if plots.track is not None else np.zeros(len(plots), dtype=str)
     ti, _ = track_index(labels)
     m = build(name, table, d=plots.d, range_rate=plots.has_range_rate, source=source)
-    cols = run_tracks(m.filter, m.prepare(plots), ti, m.initiate)
+    gate = math.inf if name.endswith("-spec") else GROSS_NIS
+    cols = run_tracks(m.filter, m.prepare(plots), ti, m.initiate, gate=gate)
     first = [*COMMON_COLUMNS, "status", "nis"]
     return {c: cols[c] for c in first} | {c: v for c, v in cols.items() if c not in first}
 

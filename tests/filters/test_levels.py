@@ -37,11 +37,14 @@ from seatrack.simulate import Leg, NoiseModel, observe, trajectory
 SENSOR = SensorNoise(10.0, math.radians(0.3))
 
 
-def _plots(legs, speed=8.0, dt=2.5, n=200, seed=1, start=(4e3, 3e3), epsilon=0.0, course=1.0):
+def _plots(
+    legs, speed=8.0, dt=2.5, n=200, seed=1, start=(4e3, 3e3), epsilon=0.0, course=1.0,
+    scale=(10.0, 25.0),
+):  # fmt: skip
     rng = np.random.default_rng(seed)
     times = dt * np.arange(n)
     tr = trajectory(list(start), course, speed, legs, times=times)
-    noise = NoiseModel([SENSOR.sigma_range, SENSOR.sigma_azimuth], epsilon, (10.0, 25.0))
+    noise = NoiseModel([SENSOR.sigma_range, SENSOR.sigma_azimuth], epsilon, scale)
     m = observe(tr, None, ("range", "azimuth"), noise, rng)
     plots = Plots(tr.t, m.z[:, 0], m.z[:, 1], sensor=m.sensor_pos, sensor_vel=m.sensor_vel)
     return plots, tr, m
@@ -249,9 +252,13 @@ def test_the_ladder_is_not_overconfident_on_a_straight_target():
 @pytest.mark.parametrize("epsilon, lo, hi", [(0.0, 0.0, 0.03), (0.2, 0.12, 0.3)])
 def test_the_outlier_probability_is_learnt(epsilon, lo, hi):
     """robust-adaptive learns each channel's outlier rate: it falls on clean plots and
-    settles near the true 20 % on contaminated ones (8 tracks, 300 scans)."""
-    parts = [_plots([Leg.straight(1e4)], n=300, seed=50 + i, epsilon=epsilon)[0] for i in range(8)]
-    f = ContaminatedLevels(ContaminatedConfig(), SENSOR)
+    settles near the true 20 % on plots contaminated at its outlier scale (8 tracks, 300
+    scans)."""
+    cfg = ContaminatedConfig()
+    k = tuple(cfg.scales(2, False))
+    parts = [_plots([Leg.straight(1e4)], n=300, seed=50 + i, epsilon=epsilon, scale=k)[0]
+             for i in range(8)]  # fmt: skip
+    f = ContaminatedLevels(cfg, SENSOR)
     eps = []
     for p in parts:
         x0, P0 = plot_gaussian(p.take([0]), SENSOR, 10.0, False)
@@ -303,3 +310,24 @@ def test_huber_levels_are_not_driven_agile_by_outliers():
     late = t >= 200.0
     v_err = np.hypot(out["vx_mps"][late] - 4.0, out["vy_mps"][late] - 3.0)
     assert np.sqrt(np.mean(v_err**2)) < 8.0
+
+
+def test_gross_outliers_do_not_make_the_levels_agile():
+    """robust-adaptive, 20 % of the plot channels at 10 sigma on a straight ship: the default
+    outlier scale (k = 100) keeps the quiet levels; Ramazanov's k = (10, 25) lets the
+    outliers vote the IMM into its agile levels (velocity errors of tens of m/s)."""
+    parts = [_plots([Leg.straight(1e4)], n=200, seed=70 + i, epsilon=0.2, scale=(100.0, 100.0))
+             for i in range(4)]  # fmt: skip
+
+    def vel_rmse(cfg):
+        errs = []
+        for plots, tr, _ in parts:
+            cols = _run(ContaminatedLevels(cfg, SENSOR), plots)
+            v = np.stack([cols["vx_mps"], cols["vy_mps"]], -1)[50:]
+            errs.append(np.sum((v - tr.vel[50:, :2]) ** 2, -1))
+        return float(np.sqrt(np.mean(errs)))
+
+    default = ContaminatedConfig()
+    assert default.outlier_scale_range == default.outlier_scale_azimuth == 100.0
+    old = ContaminatedConfig(outlier_scale_range=10.0, outlier_scale_azimuth=25.0)
+    assert vel_rmse(default) < 2.0 < 10.0 < vel_rmse(old)

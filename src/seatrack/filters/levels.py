@@ -195,13 +195,13 @@ class OutlierConfig:
     ``k = 100`` (an outlier std of 10 sigma) on every channel, not Ramazanov's set-up
     ``k = (10, 25)`` (kept by ``robust-adaptive-spec``): with ``k = (10, 25)`` a gross
     outlier (10 sigma) is better explained by an agile level than by the outlier component,
-    and the level IMM went agile -- 20 % of 10-sigma plots (tuning seeds of
-    ``benchmarks/defaults.py``, ais-sonar-c20 / submarine-c20 with ``OUTLIER_SCALE``
-    100): ``robust-adaptive`` 54 / 55 m and 21-23 m/s velocity errors, ``turning`` and
-    ``mm`` 122 / 247 m and 83-154 m/s; with ``k = 100`` 15 / 22 m and 1.4 m/s, 41 / 51 m
-    and 16-18 m/s. On the sets whose outliers are exactly ``k = (10, 25)`` it costs 3-6 %
-    (robust-adaptive 0.487 / 0.600 -> 0.518 / 0.618 of the best fixed q) and changes the
-    clean sets by -4 to +4 %.
+    and the level IMM went agile. With 20 % of 10-sigma plots
+    (``benchmarks/defaults_experiments.py --gross-outliers --runs 12``: tuning seeds of
+    ais-sonar-c20 / submarine-c20 with outliers at 10 sigma) ``robust-adaptive`` had 54 / 55
+    m and 21-23 m/s velocity errors, ``turning`` and ``mm`` 122 / 247 m and 83-154 m/s; with
+    ``k = 100`` 15 / 22 m and 1.4 m/s, 41 / 51 m and 16-18 m/s. On the sets whose outliers
+    are exactly ``k = (10, 25)`` it costs 3-6 % (robust-adaptive 0.487 / 0.600 -> 0.518 /
+    0.618 of the best fixed q) and changes the clean sets by -4 to +4 %.
     """
 
     outlier_probability: float = param(

@@ -177,6 +177,17 @@ def stack_plots(scs: Sequence[Scenario]) -> dict[str, np.ndarray]:
     }  # fmt: skip
 
 
+def polar_setup(
+    scs: Sequence[Scenario],
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, Any, np.ndarray]:
+    """The stacked plots ``z (B, N, m)``, sensor states ``(B, N, 4)`` and scan times of the
+    runs of a set, their polar measurement model on ``[x, y, vx, vy]`` and its angular
+    flags (the set-up of every batched EKF of the benchmark)."""
+    st = stack_plots(scs)
+    model = measurement_model(2, 4, st["z"].shape[-1] == 3)
+    return st["z"], st["sensor"], st["t"], model, model.angular.astype(float)
+
+
 def cv_ekf_batch(
     scs: Sequence[Scenario],
     q: np.ndarray,
@@ -194,12 +205,9 @@ def cv_ekf_batch(
     -------
     (G, B, N, 4) filtered states.
     """
-    st = stack_plots(scs)
-    z, sen, t = st["z"], st["sensor"], st["t"]
+    z, sen, t, model, ang = polar_setup(scs)
     B, N, m = z.shape
     G = len(q)
-    model = measurement_model(2, 4, m == 3)
-    ang = model.angular.astype(float)
     x0, P0 = plot_gaussian(scs[0].plots.take(np.zeros(1, int)), scs[0].sensor, speed_sigma)
     x0 = np.stack([plot_gaussian(s.plots.take(np.zeros(1, int)), s.sensor, speed_sigma)[0][0]
                    for s in scs])  # fmt: skip

@@ -67,6 +67,7 @@ from defaults import (  # noqa: E402
     SETS,
     anchor_rows,
     method_rows,
+    polar_setup,
     print_set,
     rmse,
     seeds,
@@ -505,12 +506,9 @@ def kinematic_batch(
     """CA / Singer EKFs on polar plots for every run and every PSD of ``qs`` at once,
     ``(G, B, N, 4)``; started from the first plot (class speed and acceleration maxima as
     the velocity and acceleration stds)."""
-    st = stack_plots(scs)
-    z, sen, t = st["z"], st["sensor"], st["t"]
+    z, sen, t, model, ang = polar_setup(scs)
     B, N, m = z.shape
     G = len(qs)
-    model = measurement_model(2, 4, m == 3)
-    ang = model.angular.astype(float)
     x4, P4 = _start(scs, tc.speed_max)
     x = np.zeros((G, B, 6))
     x[..., :4] = x4

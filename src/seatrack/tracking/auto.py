@@ -63,7 +63,7 @@ AUTO_NOISE: dict[str, str] = {
     "huber": "own",  # 158.7 / 158.7: a level IMM already (wrap is void)
     "student-t": "own",  # 160.4 / 160.4: idem
     "robust": "own",  # 158.7 / 158.7: idem
-    "robust-adaptive": "own",  # 158.3 / 158.3: idem
+    "robust-adaptive": "own",  # 158.1 / 158.1: idem
     "turning": "own",  # 157.8 / 157.8: idem
     "imm": "own",  # 184.2 / 184.2: its update starts from its model states (wrap is void)
     "mm": "own",  # 157.8 / 157.8: a level IMM already

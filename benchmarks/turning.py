@@ -35,8 +35,9 @@ Tuned rows (labelled; all start from the same first-plot initialisation,
 Metrics after a 10-scan transient: position / speed / heading RMSE on straight legs, in
 turns and overall (position 3-D for the aircraft, 2-D for ships; speed and heading
 horizontal); turn detection delay (first scan with turn_state != straight, or IMM
-CT-probability > 0.5, after a turn starts; "det%" = turns detected before the turn ends
-+ 20 s), false alarms (fraction of straight-leg scans >= 60 s after a turn with the
+CT-probability > 0.5, the level IMM's p_manoeuvre > 0.5 for the default rows, the patent's
+vote for their "(turn_state)" rows, after a turn starts; "det%" = turns detected before the
+turn ends + 20 s), false alarms (fraction of straight-leg scans >= 60 s after a turn with the
 indicator on), and the single-track time per scan.
 
 Seeds and tuning: evaluation runs use ``SeedSequence(EVAL_SEED).spawn(n)``, tuning runs
@@ -523,6 +524,9 @@ def evaluate(case: Case, n_runs: int, tuned: dict[str, float], ip: IMMParams) ->
             cols["p_manoeuvre"] > 0.5 if "p_manoeuvre" in cols else cols["turn_state"] != "straight"
         )
         add(label, X, ind.reshape(X.shape[:2]), us, "defaults + nominal noise")
+        if "p_manoeuvre" in cols:  # the same run, the patent's vote as the indicator
+            vote = (cols["turn_state"] != "straight").reshape(X.shape[:2])
+            add(f"{label} (turn_state)", X, vote, us, "same run, turn_state vote")
     # tuned rows (parameters chosen on the TUNING seeds)
     X, ind = run_turning(case, b, cfg)
     add("turning-spec tuned", X, ind, times["turning"], f"q={cfg.q_nominal:.3g} tuned")

@@ -331,3 +331,33 @@ def test_gross_outliers_do_not_make_the_levels_agile():
     assert default.outlier_scale_range == default.outlier_scale_azimuth == 100.0
     old = ContaminatedConfig(outlier_scale_range=10.0, outlier_scale_azimuth=25.0)
     assert vel_rmse(default) < 2.0 < 10.0 < vel_rmse(old)
+
+
+def test_manoeuvre_probability_is_relative_to_the_usual_level():
+    """On the class-free ladder a level above the quietest is not a manoeuvre when the
+    track usually lives there; with a target class level 0 is the straight leg."""
+    f = LevelIMM(LevelIMMConfig(), SENSOR)
+    st = f.initiate(np.zeros(2), np.zeros((2, 4)), np.tile(np.eye(4), (2, 1, 1)))
+    mu = np.array([[0.05, 0.8, 0.1, 0.03, 0.02], [0.05, 0.1, 0.05, 0.78, 0.02]])
+    usual = np.array([[0.05, 0.9, 0.03, 0.01, 0.01], [0.05, 0.9, 0.03, 0.01, 0.01]])
+    aux = {**st.aux, "mu": mu, "mu_avg": usual}
+    p = f.manoeuvre_probability(st.replace(aux=aux))
+    assert np.allclose(p, [0.15, 0.85])  # levels above the usual level 1
+    cls = LevelIMM(LevelIMMConfig.for_target(SHIP), SENSOR)
+    two = np.array([[0.9, 0.1], [0.3, 0.7]])
+    st2 = cls.initiate(np.zeros(2), np.zeros((2, 4)), np.tile(np.eye(4), (2, 1, 1)))
+    aux2 = {**st2.aux, "mu": two, "mu_avg": np.array([[0.1, 0.9], [0.1, 0.9]])}
+    assert np.allclose(cls.manoeuvre_probability(st2.replace(aux=aux2)), [0.1, 0.7])
+
+
+def test_the_usual_level_is_a_time_average():
+    f = LevelIMM(LevelIMMConfig(), SENSOR)
+    a = {"mu_avg": np.full((1, 5), np.nan), "t_avg": np.full(1, np.nan)}
+    mu1 = np.array([[0.0, 1.0, 0.0, 0.0, 0.0]])
+    out = f._usual_level(a, mu1, np.array([0.0]))
+    assert np.allclose(out["mu_avg"], mu1)  # the first update starts the average
+    mu2 = np.array([[0.0, 0.0, 1.0, 0.0, 0.0]])
+    tau = f.config.sojourn_time
+    out2 = f._usual_level(out, mu2, np.array([tau]))
+    w = 1 - math.exp(-1.0)
+    assert np.allclose(out2["mu_avg"], (1 - w) * mu1 + w * mu2) and out2["t_avg"][0] == tau

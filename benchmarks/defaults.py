@@ -137,13 +137,7 @@ TRACK_METHODS = tuple(METHODS)
 # ---------------------------------------------------------------------------
 def nominal_config(sc: Scenario) -> dict[str, Any]:
     """What a user gives: the sensor's nominal noise, in the documented keys."""
-    cfg: dict[str, Any] = {
-        "sigma_range_m": sc.sensor.sigma_range,
-        "sigma_azimuth_deg": math.degrees(sc.sensor.sigma_azimuth),
-    }
-    if sc.plots.has_range_rate:
-        cfg["sigma_range_rate_mps"] = sc.sensor.sigma_range_rate
-    return cfg
+    return dict(sc.sensor_table())
 
 
 def run_method(name: str, scs: Sequence[Scenario], config: dict[str, Any]) -> Estimate:

@@ -163,3 +163,16 @@ def test_ais_truth_follows_the_real_reports() -> None:
     spd = np.hypot(st.sx.derivative()(tt), st.sy.derivative()(tt))
     ok = np.isfinite(sog)
     assert np.median(np.abs(spd[ok] - sog[ok])) < 0.5
+
+
+def test_sensor_table_is_what_a_user_gives() -> None:
+    """The nominal noise in the documented keys parses back to the scenario's sensor."""
+    from seatrack.filters.registry import build
+
+    for sc in (random_manoeuvres("ship", 5), random_manoeuvres("fighter", 5)):
+        table = sc.sensor_table()
+        assert math.isclose(table["sigma_azimuth_deg"], math.degrees(sc.sensor.sigma_azimuth))
+        assert ("sigma_range_rate_mps" in table) == sc.plots.has_range_rate
+        m = build("ekf", table, d=2, range_rate=sc.plots.has_range_rate)
+        assert math.isclose(m.filter.sensor.sigma_range, sc.sensor.sigma_range)
+        assert math.isclose(m.filter.sensor.sigma_azimuth, sc.sensor.sigma_azimuth)

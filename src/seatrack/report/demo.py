@@ -88,16 +88,6 @@ class Section:
     methods: tuple[str, ...] = field(default=())  #: methods the section is made for
 
 
-def _sensor_config(sc: Scenario) -> dict[str, Any]:
-    cfg: dict[str, Any] = {
-        "sigma_range_m": sc.sensor.sigma_range,
-        "sigma_azimuth_deg": math.degrees(sc.sensor.sigma_azimuth),
-    }
-    if sc.plots.has_range_rate:
-        cfg["sigma_range_rate_mps"] = sc.sensor.sigma_range_rate
-    return cfg
-
-
 def _positions(cols: dict[str, Any], n: int) -> np.ndarray:
     return np.stack([cols["x_m"], cols["y_m"]], -1).reshape(n, -1, 2)
 
@@ -113,7 +103,7 @@ def rmse_rows(
     """Position RMSE of each ``(method, extra keys)`` on the runs (one batch each), the
     hindsight-best fixed-q EKF of ``q_grid`` as the anchor (last row), and the estimates
     ``(B, N, 2)`` by label."""
-    plots, base, n = labelled_runs(scs), _sensor_config(scs[0]), len(scs)
+    plots, base, n = labelled_runs(scs), scs[0].sensor_table(), len(scs)
     best = min((_rmse(_positions(run("ekf", plots, {**base, "q": q}), n), scs), q) for q in q_grid)
     rows, est = [], {}
     for method, extra in jobs:

@@ -169,6 +169,17 @@ class Scenario:
     epsilon: float
     outlier_scale: tuple[float, ...]
 
+    def sensor_table(self) -> dict[str, float]:
+        """What a user gives a method: the sensor's nominal noise in the documented
+        configuration keys (degrees at the edge), range rate when the plots have it."""
+        cfg = {
+            "sigma_range_m": self.sensor.sigma_range,
+            "sigma_azimuth_deg": math.degrees(self.sensor.sigma_azimuth),
+        }
+        if self.plots.has_range_rate:
+            cfg["sigma_range_rate_mps"] = self.sensor.sigma_range_rate
+        return cfg
+
     @property
     def dt(self) -> float:
         return float(self.plots.t[1] - self.plots.t[0])

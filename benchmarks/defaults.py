@@ -137,7 +137,7 @@ TRACK_METHODS = tuple(METHODS)
 # ---------------------------------------------------------------------------
 def nominal_config(sc: Scenario) -> dict[str, Any]:
     """What a user gives: the sensor's nominal noise, in the documented keys."""
-    return dict(sc.sensor_table())
+    return sc.sensor_table()
 
 
 def run_method(name: str, scs: Sequence[Scenario], config: dict[str, Any]) -> Estimate:

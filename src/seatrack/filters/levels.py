@@ -549,7 +549,7 @@ class LevelIMM(ConfiguredFilter, CartesianState):
     def _usual_level(self, a: Any, mu: FloatArray, t: FloatArray) -> dict[str, FloatArray]:
         """The level probabilities averaged over about ``sojourn_time`` (exponentially, in
         time; the first update starts the average): ``mu_avg (B, M)`` and its time."""
-        tau = float(getattr(self.config, "sojourn_time", 200.0))
+        tau = self.config.sojourn_time
         w = 1.0 - np.exp(-np.maximum(t - a["t_avg"], 0.0) / tau)
         w = np.where(np.isfinite(w), w, 1.0)[:, None]
         prev = np.where(np.isfinite(a["mu_avg"]), a["mu_avg"], mu)

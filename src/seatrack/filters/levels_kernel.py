@@ -37,6 +37,7 @@ from seatrack.kalman import (
     forward_m,
     matmul_core,
     predict_core,
+    wrap_angle,
 )
 from seatrack.models.measurement import polar_core
 
@@ -52,7 +53,6 @@ __all__ = [
 ]
 
 _LOG_2PI = math.log(2.0 * math.pi)
-_TWO_PI = 2.0 * math.pi
 
 
 class Rule(IntEnum):
@@ -213,13 +213,6 @@ def level_predict_core(X, PP, mu, PI, q, F, Q1, Xo, PPo, c, x, P):  # pragma: no
 
 
 @njit(cache=True)
-def _wrap(v):  # pragma: no cover - compiled
-    """An angle difference to ``(-pi, pi]`` (:func:`seatrack.geometry.wrap_pi`)."""
-    w = (v + math.pi) % _TWO_PI - math.pi
-    return w + _TWO_PI if w <= -math.pi else w
-
-
-@njit(cache=True)
 def _hph_diag(H, P, out):  # pragma: no cover - compiled
     """``diag(H P H^T)`` summed as NumPy's ``einsum('ij,jk,ik->i')``."""
     m, n = H.shape
@@ -305,7 +298,7 @@ def _nis(x, P, z, s, d, rr, angular, r, hx, H, y, HP, A, S, L, w):  # pragma: no
     polar_core(x.reshape((1, n)), s.reshape((1, s.shape[0])), d, rr, hx, H)
     for a in range(m):
         v = z[a] - hx[0, a]
-        y[a] = _wrap(v) if angular[a] > 0.0 else v
+        y[a] = wrap_angle(v) if angular[a] > 0.0 else v
     matmul_core(H[0], P, HP)
     matmul_core(HP, H[0].T, A)
     for a in range(m):
@@ -370,7 +363,7 @@ def level_update_core(
             y = Y[b, j]
             for a in range(m):
                 v = zb[a] - hx[j, a]
-                y[a] = _wrap(v) if angular[a] > 0.0 else v
+                y[a] = wrap_angle(v) if angular[a] > 0.0 else v
             if rule == 0:
                 v = mixture_item(PP[b, j], y, H[j], r, G, lp, k, Xo[b, j], PPo[b, j], o[b, j], ws,
                                  tn, tm)  # fmt: skip

@@ -40,11 +40,17 @@ from typing import Any  # noqa: E402
 import numpy as np  # noqa: E402
 import pyarrow.csv as pacsv  # noqa: E402
 
-from ais_data import hourly_files, vessels, write_csv  # noqa: E402
-from seatrack.data import AIS_SAMPLES, ais_sample  # noqa: E402
-from seatrack.filters.ais import AisTrackerConfig, track_reports, track_vessels  # noqa: E402
+from ais_data import hourly_files  # noqa: E402
+from ais_data import vessels  # noqa: E402
+from ais_data import write_csv  # noqa: E402
+from seatrack.data import AIS_SAMPLES  # noqa: E402
+from seatrack.data import ais_sample  # noqa: E402
+from seatrack.filters.ais import AisTrackerConfig  # noqa: E402
+from seatrack.filters.ais import track_reports  # noqa: E402
+from seatrack.filters.ais import track_vessels  # noqa: E402
 from seatrack.geometry import local_frames  # noqa: E402
-from seatrack.io.ais import read_ais, track_files  # noqa: E402
+from seatrack.io.ais import read_ais  # noqa: E402
+from seatrack.io.ais import track_files  # noqa: E402
 
 DATA = ais_sample(AIS_SAMPLES[0]).parent  # the real files bundled in seatrack/data/ais
 REAL = list(AIS_SAMPLES)

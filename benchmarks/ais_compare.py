@@ -31,8 +31,11 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
-from ais_data import hourly_files, vessels, write_csv
-from seatrack.data import AIS_SAMPLES, ais_sample
+from ais_data import hourly_files
+from ais_data import vessels
+from ais_data import write_csv
+from seatrack.data import AIS_SAMPLES
+from seatrack.data import ais_sample
 
 ROOT = Path(__file__).resolve().parent.parent
 

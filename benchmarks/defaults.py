@@ -42,7 +42,8 @@ import argparse
 import math
 import sys
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -50,22 +51,24 @@ import numpy as np
 
 from seatrack import kalman
 from seatrack.evaluate.montecarlo import format_table
-from seatrack.filters.base import measurement_model, plot_gaussian
-from seatrack.filters.registry import METHODS, run
-from seatrack.models.motion import cv_noise, cv_transition
-from seatrack.models.targets import TargetClass, target_class
-from seatrack.simulate.families import (
-    ACTIVE_SONAR,
-    COASTAL_RADAR,
-    HEADLINE_SEEDS,
-    TUNING_SEEDS,
-    Scenario,
-    SensorSpec,
-    ais_replay,
-    labelled_runs,
-    random_manoeuvres,
-    weaving,
-)
+from seatrack.filters.base import measurement_model
+from seatrack.filters.base import plot_gaussian
+from seatrack.filters.registry import METHODS
+from seatrack.filters.registry import run
+from seatrack.models.motion import cv_noise
+from seatrack.models.motion import cv_transition
+from seatrack.models.targets import TargetClass
+from seatrack.models.targets import target_class
+from seatrack.simulate.families import ACTIVE_SONAR
+from seatrack.simulate.families import COASTAL_RADAR
+from seatrack.simulate.families import HEADLINE_SEEDS
+from seatrack.simulate.families import TUNING_SEEDS
+from seatrack.simulate.families import Scenario
+from seatrack.simulate.families import SensorSpec
+from seatrack.simulate.families import ais_replay
+from seatrack.simulate.families import labelled_runs
+from seatrack.simulate.families import random_manoeuvres
+from seatrack.simulate.families import weaving
 
 SKIP = 10  # transient scans excluded from every metric
 Estimate = np.ndarray  # (B, N, 4): x, y, vx, vy per run and scan

@@ -49,31 +49,33 @@ import argparse
 import dataclasses
 import math
 import sys
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from seatrack import kalman
-from seatrack.filters.base import measurement_model, plot_gaussian, two_point_gaussian
+from seatrack.filters.base import measurement_model
+from seatrack.filters.base import plot_gaussian
+from seatrack.filters.base import two_point_gaussian
 from seatrack.geometry import wrap_pi
-from seatrack.models.motion import cv_noise, cv_transition
+from seatrack.models.motion import cv_noise
+from seatrack.models.motion import cv_transition
 from seatrack.models.targets import TargetClass
 from seatrack.simulate.families import Scenario
 
 sys.path.insert(0, str(Path(__file__).parent))
-from defaults import (  # noqa: E402
-    SETS,
-    anchor_rows,
-    method_rows,
-    polar_setup,
-    print_set,
-    rmse,
-    seeds,
-    stack_plots,
-    targets,
-)
+from defaults import SETS  # noqa: E402
+from defaults import anchor_rows  # noqa: E402
+from defaults import method_rows  # noqa: E402
+from defaults import polar_setup  # noqa: E402
+from defaults import print_set  # noqa: E402
+from defaults import rmse  # noqa: E402
+from defaults import seeds  # noqa: E402
+from defaults import stack_plots  # noqa: E402
+from defaults import targets  # noqa: E402
 
 Estimate = np.ndarray
 SPEED_SIGMA = 300.0  # m/s initial velocity std when no class is given (the methods' 300)
@@ -340,7 +342,9 @@ def ct_ekf_batch(
     """A single coordinated-turn EKF ``[x, y, vx, vy, w]`` (white acceleration ``q``,
     turn-rate random walk ``q_omega``), batched over the runs: the turn-rate estimate that
     a CT prediction would use, from the position innovations themselves."""
-    from seatrack.models.motion import ct_jacobian, ct_noise, ct_transition
+    from seatrack.models.motion import ct_jacobian
+    from seatrack.models.motion import ct_noise
+    from seatrack.models.motion import ct_transition
 
     st = stack_plots(scs)
     z, sen, t = st["z"], st["sensor"], st["t"]
@@ -454,7 +458,8 @@ def consistency(n: int) -> None:
     """Fighter set, TUNING seeds: position consistency (mean of the squared errors over the
     reported variances, per axis; 1 = consistent) and how often the largest model
     probability exceeds 0.99, for the multiple-model methods."""
-    from defaults import SKIP, nominal_config
+    from defaults import SKIP
+    from defaults import nominal_config
     from seatrack.filters.registry import run
 
     scs = [SETS["fighter"].make(k) for k in seeds(n, True)]
@@ -535,7 +540,8 @@ def kinematic_batch(
 
 def model_bounds(set_names: Sequence[str], n: int, tuning: bool) -> None:
     """Best RMSE of every single motion model with hindsight noise (module docstring)."""
-    from defaults import cv_ekf_batch, q_grid
+    from defaults import cv_ekf_batch
+    from defaults import q_grid
     from seatrack.models.targets import target_class
 
     for name in set_names:
@@ -575,7 +581,9 @@ def model_bounds(set_names: Sequence[str], n: int, tuning: bool) -> None:
 def gross_outliers(n: int, tuning: bool) -> None:
     """The contaminated sets with 10-sigma outliers (module docstring)."""
     import seatrack.simulate.families as families
-    from defaults import anchor_rows, nominal_config, run_method
+    from defaults import anchor_rows
+    from defaults import nominal_config
+    from defaults import run_method
     from seatrack.models.targets import target_class
 
     families.OUTLIER_SCALE = (100.0, 100.0, 100.0)  # this process only

@@ -20,7 +20,8 @@ import numpy as np
 
 from seatrack import kalman
 from seatrack.filters.imm import IMM
-from seatrack.models import ConstantVelocity, Position
+from seatrack.models import ConstantVelocity
+from seatrack.models import Position
 
 
 def _best(fn, n: int, repeat: int) -> float:
@@ -58,7 +59,8 @@ def main() -> None:
             r = kalman.update(x, P, Z[i % 1000], H, R)
             x, P = r.x, r.P
 
-    from filterpy.kalman import IMMEstimator, KalmanFilter
+    from filterpy.kalman import IMMEstimator
+    from filterpy.kalman import KalmanFilter
 
     kf = KalmanFilter(dim_x=4, dim_z=2)
     kf.F, kf.Q, kf.H, kf.R, kf.x, kf.P = F, Q, H, R, x0.copy(), P0.copy()
@@ -76,12 +78,8 @@ def main() -> None:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         from stonesoup.models.measurement.linear import LinearGaussian
-        from stonesoup.models.transition.linear import (
-            CombinedLinearGaussianTransitionModel,
-        )
-        from stonesoup.models.transition.linear import (
-            ConstantVelocity as SSCV,
-        )
+        from stonesoup.models.transition.linear import CombinedLinearGaussianTransitionModel
+        from stonesoup.models.transition.linear import ConstantVelocity as SSCV
         from stonesoup.predictor.kalman import KalmanPredictor
         from stonesoup.types.detection import Detection
         from stonesoup.types.hypothesis import SingleHypothesis

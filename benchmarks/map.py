@@ -30,7 +30,10 @@ import numpy as np  # noqa: E402
 
 from seatrack.commands.ais import track_files  # noqa: E402
 from seatrack.data import ais_sample  # noqa: E402
-from seatrack.report.html import VesselTrack, map_tracks, vessel_tracks, write_html  # noqa: E402
+from seatrack.report.html import VesselTrack  # noqa: E402
+from seatrack.report.html import map_tracks  # noqa: E402
+from seatrack.report.html import vessel_tracks  # noqa: E402
+from seatrack.report.html import write_html  # noqa: E402
 
 
 def synthetic(n_reports: int, n_vessels: int, seed: int = 0) -> tuple[Any, ...]:

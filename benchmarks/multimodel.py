@@ -67,17 +67,29 @@ from typing import Any
 
 import numpy as np
 
-from seatrack.evaluate.metrics import chi2_interval, nees
-from seatrack.evaluate.montecarlo import format_table, run_seeds
-from seatrack.filters.base import Plots, SensorNoise, plot_gaussian
+from seatrack.evaluate.metrics import chi2_interval
+from seatrack.evaluate.metrics import nees
+from seatrack.evaluate.montecarlo import format_table
+from seatrack.evaluate.montecarlo import run_seeds
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import plot_gaussian
 from seatrack.filters.converted import convert_plots
-from seatrack.filters.ekf import EKF, EKFConfig
-from seatrack.filters.imm import CVCTIMM, CVCTIMMConfig
-from seatrack.filters.multimodel import MultiModelConfig, MultiModelFilter
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.filters.ekf import EKF
+from seatrack.filters.ekf import EKFConfig
+from seatrack.filters.imm import CVCTIMM
+from seatrack.filters.imm import CVCTIMMConfig
+from seatrack.filters.multimodel import MultiModelConfig
+from seatrack.filters.multimodel import MultiModelFilter
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 
 sys.path.insert(0, str(Path(__file__).parent))
-from headline import labelled_plots, nominal, run_registry  # noqa: E402
+from headline import labelled_plots  # noqa: E402
+from headline import nominal  # noqa: E402
+from headline import run_registry  # noqa: E402
 
 EVAL_SEED = 4_2026_1123
 TUNE_SEED = 99_4
@@ -411,7 +423,8 @@ def run_imm_single(
 def filterpy_speed(b: Batch, case: Case, n_rep: int) -> tuple[float, float]:
     """us/step of FilterPy's IMMEstimator (5 KF models, control input) and of MultiModelFilter.step
     on the same single track."""
-    from filterpy.kalman import IMMEstimator, KalmanFilter
+    from filterpy.kalman import IMMEstimator
+    from filterpy.kalman import KalmanFilter
 
     cfg = MultiModelConfig(sigma_range_rate=case.sigma_rr, use_range_rate=False)
     flt = MultiModelFilter(cfg)

@@ -63,18 +63,28 @@ import math
 import os
 import time
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
 from seatrack.evaluate.montecarlo import format_table
-from seatrack.evaluate.multitarget import RunScores, score_run, summary_row
-from seatrack.filters.base import Plots, SensorNoise
-from seatrack.simulate.multitarget import MultiTargetRun, TargetPopulation, simulate_multitarget
+from seatrack.evaluate.multitarget import RunScores
+from seatrack.evaluate.multitarget import score_run
+from seatrack.evaluate.multitarget import summary_row
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.simulate.multitarget import MultiTargetRun
+from seatrack.simulate.multitarget import TargetPopulation
+from seatrack.simulate.multitarget import simulate_multitarget
 from seatrack.simulate.scenarios import SensorConfig
-from seatrack.tracking import MultiTargetTracker, TrackerConfig
-from seatrack.tracking.auto import AUTO_NOISE, noise_levels, per_track_filter, scan_period
+from seatrack.tracking import MultiTargetTracker
+from seatrack.tracking import TrackerConfig
+from seatrack.tracking.auto import AUTO_NOISE
+from seatrack.tracking.auto import noise_levels
+from seatrack.tracking.auto import per_track_filter
+from seatrack.tracking.auto import scan_period
 from seatrack.tracking.gating import gate_threshold
 
 EVAL_SEED = 15_2026
@@ -199,10 +209,8 @@ def _ss_components(s: dict[str, float], gate_p: float) -> dict[str, Any]:
     from stonesoup.initiator.simple import MultiMeasurementInitiator
     from stonesoup.measures import Mahalanobis
     from stonesoup.models.measurement.nonlinear import CartesianToBearingRange
-    from stonesoup.models.transition.linear import (
-        CombinedLinearGaussianTransitionModel,
-        ConstantVelocity,
-    )
+    from stonesoup.models.transition.linear import CombinedLinearGaussianTransitionModel
+    from stonesoup.models.transition.linear import ConstantVelocity
     from stonesoup.predictor.kalman import ExtendedKalmanPredictor
     from stonesoup.types.array import StateVector
     from stonesoup.types.state import GaussianState
@@ -398,7 +406,8 @@ def tune_methods(runs: list[MultiTargetRun]) -> None:
     sensor noise, with each automatic process-noise rule: the evidence for
     ``seatrack.tracking.auto.AUTO_NOISE`` (methods needing range rate are skipped: the
     scenarios have none)."""
-    from seatrack.filters.registry import METHODS, method_class
+    from seatrack.filters.registry import METHODS
+    from seatrack.filters.registry import method_class
 
     print("\nper-track filters on the tuning scenarios (mean GOSPA; * = AUTO_NOISE)")
     for name in METHODS:

@@ -28,16 +28,18 @@ from dataclasses import replace
 
 import numpy as np
 
-from seatrack.evaluate.montecarlo import format_table, monte_carlo
+from seatrack.evaluate.montecarlo import format_table
+from seatrack.evaluate.montecarlo import monte_carlo
 from seatrack.geometry import wrap_pi
-from seatrack.navigation.navigator import AuxData, Echoes, NavigatorConfig, navigate
+from seatrack.navigation.navigator import AuxData
+from seatrack.navigation.navigator import Echoes
+from seatrack.navigation.navigator import NavigatorConfig
+from seatrack.navigation.navigator import navigate
 from seatrack.navigation.survey import survey
-from seatrack.simulate.radar_echoes import (
-    EchoEnvironment,
-    channel_landmarks,
-    river_route,
-    simulate_radar,
-)
+from seatrack.simulate.radar_echoes import EchoEnvironment
+from seatrack.simulate.radar_echoes import channel_landmarks
+from seatrack.simulate.radar_echoes import river_route
+from seatrack.simulate.radar_echoes import simulate_radar
 
 ROUTE = river_route(10_000.0, 4.0)
 LANDMARKS = channel_landmarks(ROUTE, 18, np.random.default_rng(20260308))

@@ -54,20 +54,28 @@ from pathlib import Path
 
 import numpy as np
 
-from seatrack.evaluate.metrics import nees, position_error, velocity_error
+from seatrack.evaluate.metrics import nees
+from seatrack.evaluate.metrics import position_error
+from seatrack.evaluate.metrics import velocity_error
 from seatrack.evaluate.montecarlo import format_table
-from seatrack.filters.robust import RobustConfig, SonarModel, TrackEstimates, robust_filter
-from seatrack.filters.robust_baselines import (
-    clairvoyant_filter,
-    ekf_filter,
-    huber_filter,
-    student_t_filter,
-)
-from seatrack.geometry import angle_diff, bearing
-from seatrack.simulate.marine import MarineScenario, SonarRuns, simulate_runs
+from seatrack.filters.robust import RobustConfig
+from seatrack.filters.robust import SonarModel
+from seatrack.filters.robust import TrackEstimates
+from seatrack.filters.robust import robust_filter
+from seatrack.filters.robust_baselines import clairvoyant_filter
+from seatrack.filters.robust_baselines import ekf_filter
+from seatrack.filters.robust_baselines import huber_filter
+from seatrack.filters.robust_baselines import student_t_filter
+from seatrack.geometry import angle_diff
+from seatrack.geometry import bearing
+from seatrack.simulate.marine import MarineScenario
+from seatrack.simulate.marine import SonarRuns
+from seatrack.simulate.marine import simulate_runs
 
 sys.path.insert(0, str(Path(__file__).parent))
-from headline import labelled_plots, nominal, run_registry  # noqa: E402
+from headline import labelled_plots  # noqa: E402
+from headline import nominal  # noqa: E402
+from headline import run_registry  # noqa: E402
 
 Runner = Callable[[SonarRuns], TrackEstimates]
 
@@ -176,7 +184,9 @@ def time_per_cycle(fn: Runner, runs: SonarRuns, repeats: int = 3) -> float:
 
 def core_arithmetic(B: int, repeats: int = 200) -> str:
     """Time of the compiled predict + update per track and cycle: beam channels vs EKF."""
-    from seatrack.kalman import extended_predict, extended_update, update
+    from seatrack.kalman import extended_predict
+    from seatrack.kalman import extended_update
+    from seatrack.kalman import update
 
     rng = np.random.default_rng(0)
 

@@ -32,24 +32,24 @@ from __future__ import annotations
 import argparse
 import math
 import time
-from datetime import datetime, timedelta
+from datetime import datetime
+from datetime import timedelta
 
 import numpy as np
 from scipy.optimize import least_squares
 
 from seatrack.evaluate.montecarlo import format_table
-from seatrack.geometry import knots_to_mps, wrap_pi
+from seatrack.geometry import knots_to_mps
+from seatrack.geometry import wrap_pi
 from seatrack.simulate.tma import classic_scenario
-from seatrack.tma import (
-    Bearings,
-    bearing_residuals,
-    crb,
-    leg_starts,
-    leg_time_matrix,
-    position_crb,
-    solve,
-    solve_many,
-)
+from seatrack.tma import Bearings
+from seatrack.tma import bearing_residuals
+from seatrack.tma import crb
+from seatrack.tma import leg_starts
+from seatrack.tma import leg_time_matrix
+from seatrack.tma import position_crb
+from seatrack.tma import solve
+from seatrack.tma import solve_many
 
 Q_EKF = 1e-4  # m^2/s^3
 
@@ -110,10 +110,8 @@ def run_filterpy(b: Bearings, sigma: float) -> np.ndarray:
 
 def run_stonesoup(b: Bearings, sigma: float) -> np.ndarray:
     from stonesoup.models.measurement.nonlinear import Cartesian2DToBearing
-    from stonesoup.models.transition.linear import (
-        CombinedLinearGaussianTransitionModel,
-        ConstantVelocity,
-    )
+    from stonesoup.models.transition.linear import CombinedLinearGaussianTransitionModel
+    from stonesoup.models.transition.linear import ConstantVelocity
     from stonesoup.predictor.kalman import ExtendedKalmanPredictor
     from stonesoup.types.angle import Bearing as SSBearing
     from stonesoup.types.detection import Detection

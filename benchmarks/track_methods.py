@@ -26,9 +26,13 @@ from pathlib import Path
 
 import numpy as np
 
-from seatrack.filters.registry import METHODS, run
+from seatrack.filters.registry import METHODS
+from seatrack.filters.registry import run
 from seatrack.io.plots import read_plots
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 from seatrack.simulate.files import write_plots
 
 SIGMA = (20.0, math.radians(0.5), 1.0)  # range m, azimuth rad, range rate m/s

@@ -68,29 +68,32 @@ from typing import Any
 import numpy as np
 
 from seatrack.evaluate.metrics import rmse
-from seatrack.evaluate.montecarlo import format_table, run_seeds
+from seatrack.evaluate.montecarlo import format_table
+from seatrack.evaluate.montecarlo import run_seeds
 from seatrack.filters.base import SensorNoise
 from seatrack.filters.imm import IMM
-from seatrack.filters.turning import (
-    TurningConfig,
-    TurningFilter,
-    TurnState,
-    ekf_step,
-    initial_state,
-    plot_covariance,
-)
-from seatrack.geometry import angle_diff, bearing
-from seatrack.models import (
-    ConstantVelocity,
-    CoordinatedTurn,
-    RangeBearing,
-    RangeBearingElevation,
-)
+from seatrack.filters.turning import TurningConfig
+from seatrack.filters.turning import TurningFilter
+from seatrack.filters.turning import TurnState
+from seatrack.filters.turning import ekf_step
+from seatrack.filters.turning import initial_state
+from seatrack.filters.turning import plot_covariance
+from seatrack.geometry import angle_diff
+from seatrack.geometry import bearing
+from seatrack.models import ConstantVelocity
+from seatrack.models import CoordinatedTurn
+from seatrack.models import RangeBearing
+from seatrack.models import RangeBearingElevation
 from seatrack.models.motion import cv_noise
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 
 sys.path.insert(0, str(Path(__file__).parent))
-from headline import labelled_plots, nominal, run_registry  # noqa: E402
+from headline import labelled_plots  # noqa: E402
+from headline import nominal  # noqa: E402
+from headline import run_registry  # noqa: E402
 
 EVAL_SEED = 20261123
 TUNE_SEED = 777

@@ -3,7 +3,8 @@ edited), shared by the AIS tests."""
 
 from pathlib import Path
 
-from seatrack.data import AIS_SAMPLES, ais_sample
+from seatrack.data import AIS_SAMPLES
+from seatrack.data import ais_sample
 
 FILES = list(AIS_SAMPLES)
 

@@ -12,7 +12,9 @@ import numpy as np
 import pytest
 
 from seatrack.filters import registry
-from seatrack.filters.base import COMMON_COLUMNS, Plots, RecursiveFilter
+from seatrack.filters.base import COMMON_COLUMNS
+from seatrack.filters.base import Plots
+from seatrack.filters.base import RecursiveFilter
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "architecture.md"
 

@@ -11,7 +11,9 @@ import pytest
 import typer
 
 from seatrack import cli
-from seatrack.cli import COMMAND_MODULES, app, main
+from seatrack.cli import COMMAND_MODULES
+from seatrack.cli import app
+from seatrack.cli import main
 
 
 def _run(*args: str) -> tuple[int, str, str]:

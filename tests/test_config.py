@@ -6,7 +6,12 @@ from dataclasses import dataclass
 
 import pytest
 
-from seatrack.config import ConfigError, describe, param, parse_config, redefault, to_edge
+from seatrack.config import ConfigError
+from seatrack.config import describe
+from seatrack.config import param
+from seatrack.config import parse_config
+from seatrack.config import redefault
+from seatrack.config import to_edge
 
 
 @dataclass(frozen=True)

@@ -14,7 +14,9 @@ import pytest
 
 from seatrack.config import describe
 from seatrack.filters.base import SensorNoise
-from seatrack.filters.registry import METHODS, TARGET_KEY, describe_method
+from seatrack.filters.registry import METHODS
+from seatrack.filters.registry import TARGET_KEY
+from seatrack.filters.registry import describe_method
 from seatrack.models.targets import TARGET_CLASSES
 
 ROOT = Path(__file__).resolve().parents[1]

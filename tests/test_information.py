@@ -8,18 +8,16 @@ from the tolerance), so the tests do not depend on the BLAS/LAPACK build.
 import numpy as np
 import pytest
 
-from seatrack.information import (
-    JACOBIAN_RTOL,
-    SingularMatrixError,
-    as_float64,
-    check_information,
-    check_jacobian,
-    covariance_from_jacobian,
-    fisher_information,
-    invert_information,
-    invert_jacobian_information,
-    whiten,
-)
+from seatrack.information import JACOBIAN_RTOL
+from seatrack.information import SingularMatrixError
+from seatrack.information import as_float64
+from seatrack.information import check_information
+from seatrack.information import check_jacobian
+from seatrack.information import covariance_from_jacobian
+from seatrack.information import fisher_information
+from seatrack.information import invert_information
+from seatrack.information import invert_jacobian_information
+from seatrack.information import whiten
 
 # columns scaled by wildly different units (m, km/s, mrad ...): the decision must not move
 UNITS = np.array([1e-6, 1.0, 1e3, 1e7])

@@ -2,7 +2,8 @@
 
 import numpy as np
 import pytest
-from filterpy.kalman import ExtendedKalmanFilter, KalmanFilter
+from filterpy.kalman import ExtendedKalmanFilter
+from filterpy.kalman import KalmanFilter
 
 from seatrack import kalman
 from seatrack.models import RangeBearing

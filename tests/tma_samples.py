@@ -6,8 +6,11 @@ import math
 import numpy as np
 
 from seatrack.geometry import bearing_rad_to_deg
-from seatrack.simulate import Leg, trajectory
-from seatrack.simulate.tma import TMAScenario, classic_scenario, scenario_from_trajectories
+from seatrack.simulate import Leg
+from seatrack.simulate import trajectory
+from seatrack.simulate.tma import TMAScenario
+from seatrack.simulate.tma import classic_scenario
+from seatrack.simulate.tma import scenario_from_trajectories
 
 HEADER = "contact,time_s,bearing_deg,observer_x_m,observer_y_m,sigma_deg\n"
 

@@ -29,9 +29,13 @@ import dataclasses
 import functools
 import math
 import tomllib
-from collections.abc import Hashable, Iterable, Mapping
+from collections.abc import Hashable
+from collections.abc import Iterable
+from collections.abc import Mapping
 from pathlib import Path
-from typing import Any, TypeVar, get_type_hints
+from typing import Any
+from typing import TypeVar
+from typing import get_type_hints
 
 from seatrack.geometry import G0
 

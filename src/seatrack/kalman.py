@@ -49,8 +49,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import guvectorize, njit
-from numpy.typing import ArrayLike, NDArray
+from numba import guvectorize
+from numba import njit
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 from seatrack.information import as_float64
 

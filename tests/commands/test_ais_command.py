@@ -238,7 +238,8 @@ def test_latin1_bytes_never_refuse_a_file(tmp_path: Path) -> None:
 def test_dask_output_equals_one_process(tmp_path: Path) -> None:
     """--dask: every report of all files shuffled by MMSI; same TRACKS as one process."""
     from seatrack.io.ais import track_files
-    from seatrack.io.ais.cluster import dask_client, track_files_dask
+    from seatrack.io.ais.cluster import dask_client
+    from seatrack.io.ais.cluster import track_files_dask
 
     files = split_file(data_file("dk_northsea_20221101_1h_selected.csv"), tmp_path, 3)
     one = track_files(files, tmp_path / "one.csv")

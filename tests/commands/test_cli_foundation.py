@@ -10,10 +10,13 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from seatrack.cli import app, main
+from seatrack.cli import app
+from seatrack.cli import main
 from seatrack.io.plots import read_plot_tracks
-from seatrack.simulate.files import BEARING_COLUMNS, read_truth
-from seatrack.simulate.scenarios import bundled_scenario, load_scenario
+from seatrack.simulate.files import BEARING_COLUMNS
+from seatrack.simulate.files import read_truth
+from seatrack.simulate.scenarios import bundled_scenario
+from seatrack.simulate.scenarios import load_scenario
 
 runner = CliRunner()
 

@@ -10,11 +10,13 @@ from typing import Any
 import numpy as np
 import pytest
 
-from browser import browse, chromium
+from browser import browse
+from browser import chromium
 from cli_inprocess import seatrack
 from seatrack.commands.demo import SECTION_FILES
 from seatrack.filters.registry import METHODS
-from seatrack.report.demo import SECTIONS, WHEN
+from seatrack.report.demo import SECTIONS
+from seatrack.report.demo import WHEN
 
 
 @pytest.fixture(scope="module")

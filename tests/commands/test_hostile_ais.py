@@ -14,13 +14,19 @@ import re
 from pathlib import Path
 
 import pytest
-from hostile_inputs import assert_clean, mutated_csv, mutated_text, run_cli, snapshot
-from hypothesis import given, settings
+from hostile_inputs import assert_clean
+from hostile_inputs import mutated_csv
+from hostile_inputs import mutated_text
+from hostile_inputs import run_cli
+from hostile_inputs import snapshot
+from hypothesis import given
+from hypothesis import settings
 from hypothesis import strategies as st
 from pyais.encode import encode_dict
 
 from ais_samples import data_file
-from seatrack.io.ais import format_times, read_ais_csv
+from seatrack.io.ais import format_times
+from seatrack.io.ais import read_ais_csv
 from seatrack.io.table import decode_text
 
 SAMPLE = data_file("dk_gothenburg_20170705_cpa.csv")
@@ -48,8 +54,8 @@ def _records(data: bytes, nmea: bool) -> int:
     """Input records as a reader sees them: physical lines (NMEA) or CSV records after the
     header (a quoted field may span lines)."""
     text, _ = decode_text(data)
-    if nmea:
-        return len(text.splitlines())
+    if nmea:  # universal line ends (LF, CRLF, CR), as the reader and Python's text files
+        return len(io.StringIO(text, newline=None).readlines())
     try:
         return max(len(list(csv.reader(io.StringIO(text, newline="")))) - 1, 0)
     except csv.Error:
@@ -104,6 +110,20 @@ def test_every_input_line_is_accounted_for(tmp_path_factory, data, nmea):
     code, rows, skipped = _run(tmp_path_factory.mktemp("acc"), raw, "a.nmea" if nmea else "a.csv")
     if code == 0:
         assert rows + skipped == _records(raw, nmea)
+
+
+@pytest.mark.parametrize("nmea", [False, True])
+@pytest.mark.parametrize("end", [b"\r\n", b"\r"])
+def test_old_line_ends_read_as_lines(tmp_path, nmea, end):
+    """CRLF and the old Mac CR alone: every line a report, as with LF (a CR-only NMEA log
+    was read as one line holding every sentence, and only its first report kept)."""
+    text = (NMEA_TEXT if nmea else CSV_TEXT).encode()
+    name = "a.nmea" if nmea else "a.csv"
+    (tmp_path / "lf").mkdir()
+    (tmp_path / "end").mkdir()
+    base = _run(tmp_path / "lf", text, name)
+    other = _run(tmp_path / "end", text.replace(b"\n", end), name)
+    assert base == other == (0, _records(text, nmea), 0)
 
 
 @pytest.mark.parametrize(

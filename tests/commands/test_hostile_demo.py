@@ -5,8 +5,11 @@ is tested in test_cli_foundation.py; its atomic outputs in test_hostile_atomic.p
 from __future__ import annotations
 
 import pytest
-from hostile_inputs import assert_clean, run_cli, snapshot
-from hypothesis import given, settings
+from hostile_inputs import assert_clean
+from hostile_inputs import run_cli
+from hostile_inputs import snapshot
+from hypothesis import given
+from hypothesis import settings
 from hypothesis import strategies as st
 
 BAD_COUNTS = ["0", "-1", "abc", "", "1e3", "nan", "100001", "99999999999999999999"]

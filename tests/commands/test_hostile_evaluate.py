@@ -9,8 +9,12 @@ import math
 from pathlib import Path
 
 import pytest
-from hostile_inputs import assert_clean, mutated_text, run_cli, snapshot
-from hypothesis import given, settings
+from hostile_inputs import assert_clean
+from hostile_inputs import mutated_text
+from hostile_inputs import run_cli
+from hostile_inputs import snapshot
+from hypothesis import given
+from hypothesis import settings
 from hypothesis import strategies as st
 from test_hostile_simulate import SCENARIO
 

@@ -11,14 +11,22 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hostile_inputs import assert_clean, mutated_csv, run_cli, snapshot
-from hypothesis import given, settings
+from hostile_inputs import assert_clean
+from hostile_inputs import mutated_csv
+from hostile_inputs import run_cli
+from hostile_inputs import snapshot
+from hypothesis import given
+from hypothesis import settings
 from hypothesis import strategies as st
 
 from seatrack.io.landmarks import write_map_csv
-from seatrack.io.navigation import NAV_COLUMNS, write_echoes, write_gyro
+from seatrack.io.navigation import NAV_COLUMNS
+from seatrack.io.navigation import write_echoes
+from seatrack.io.navigation import write_gyro
 from seatrack.io.table import read_csv_table
-from seatrack.simulate.radar_echoes import channel_landmarks, river_route, simulate_radar
+from seatrack.simulate.radar_echoes import channel_landmarks
+from seatrack.simulate.radar_echoes import river_route
+from seatrack.simulate.radar_echoes import simulate_radar
 
 PREVIOUS = b"previous output\n"
 

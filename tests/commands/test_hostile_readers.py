@@ -7,24 +7,33 @@ from collections.abc import Callable
 from pathlib import Path
 
 import pytest
-from hostile_inputs import mutated_csv, mutated_text
-from hypothesis import Phase, given, settings
+from hostile_inputs import mutated_csv
+from hostile_inputs import mutated_text
+from hypothesis import Phase
+from hypothesis import given
+from hypothesis import settings
 from hypothesis import strategies as st
-from test_hostile_ais import CSV_TEXT, NMEA_TEXT
+from test_hostile_ais import CSV_TEXT
+from test_hostile_ais import NMEA_TEXT
 from test_hostile_navigate import nav_inputs
 from test_hostile_simulate import SCENARIO
-from test_hostile_tma import BEARINGS, SUPPORT
+from test_hostile_tma import BEARINGS
+from test_hostile_tma import SUPPORT
 from test_hostile_track import PLOTS
 
 from seatrack.io.ais import read_ais
 from seatrack.io.landmarks import read_map_csv
-from seatrack.io.navigation import read_echoes, read_gyro
+from seatrack.io.navigation import read_echoes
+from seatrack.io.navigation import read_gyro
 from seatrack.io.plots import read_plots
 from seatrack.io.table import InputError
-from seatrack.io.tma import read_bearings, read_support
-from seatrack.simulate.files import read_truth, write_truth
+from seatrack.io.tma import read_bearings
+from seatrack.io.tma import read_support
+from seatrack.simulate.files import read_truth
+from seatrack.simulate.files import write_truth
 from seatrack.simulate.scenarios import load_scenario
-from seatrack.simulate.trajectories import Leg, trajectory
+from seatrack.simulate.trajectories import Leg
+from seatrack.simulate.trajectories import trajectory
 
 
 @pytest.fixture(scope="module")

@@ -12,8 +12,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hostile_inputs import assert_clean, mutated_csv, run_cli, snapshot
-from hypothesis import given, settings
+from hostile_inputs import assert_clean
+from hostile_inputs import mutated_csv
+from hostile_inputs import run_cli
+from hostile_inputs import snapshot
+from hypothesis import given
+from hypothesis import settings
 from hypothesis import strategies as st
 
 from seatrack.geometry import bearing_rad_to_deg

@@ -13,12 +13,21 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from hostile_inputs import assert_clean, mutated_csv, mutated_text, run_cli, snapshot
-from hypothesis import Phase, given, settings
+from hostile_inputs import assert_clean
+from hostile_inputs import mutated_csv
+from hostile_inputs import mutated_text
+from hostile_inputs import run_cli
+from hostile_inputs import snapshot
+from hypothesis import Phase
+from hypothesis import given
+from hypothesis import settings
 from hypothesis import strategies as st
 
 from seatrack.filters.registry import METHODS
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 
 NO_SHRINK = (Phase.explicit, Phase.reuse, Phase.generate)
 CONFIG = "q = 5.0\nsigma_range_m = 20.0\nsigma_azimuth_deg = 0.3\n"

@@ -9,10 +9,15 @@ import pytest
 
 from seatrack.cli import main
 from seatrack.geometry import wrap_pi
-from seatrack.io.landmarks import read_map_csv, write_map_csv
-from seatrack.io.navigation import NAV_COLUMNS, write_echoes, write_gyro
+from seatrack.io.landmarks import read_map_csv
+from seatrack.io.landmarks import write_map_csv
+from seatrack.io.navigation import NAV_COLUMNS
+from seatrack.io.navigation import write_echoes
+from seatrack.io.navigation import write_gyro
 from seatrack.io.table import read_csv_table
-from seatrack.simulate.radar_echoes import channel_landmarks, river_route, simulate_radar
+from seatrack.simulate.radar_echoes import channel_landmarks
+from seatrack.simulate.radar_echoes import river_route
+from seatrack.simulate.radar_echoes import simulate_radar
 
 ROUTE = river_route(2000.0, 4.0)
 

@@ -6,7 +6,9 @@ import math
 
 import pytest
 
-from seatrack.commands.options import option_in, option_positive, prepare_outputs
+from seatrack.commands.options import option_in
+from seatrack.commands.options import option_positive
+from seatrack.commands.options import prepare_outputs
 from seatrack.io.atomic import OutputError
 from seatrack.io.table import InputError
 

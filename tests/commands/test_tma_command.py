@@ -9,16 +9,20 @@ import sys
 import numpy as np
 import pytest
 import typer
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck
+from hypothesis import given
+from hypothesis import settings
 from hypothesis import strategies as st
 from typer.testing import CliRunner
 
 from seatrack import cli
 from seatrack.commands.tma import register
-from seatrack.geometry import bearing, bearing_rad_to_deg
+from seatrack.geometry import bearing
+from seatrack.geometry import bearing_rad_to_deg
 from seatrack.io.table import InputError
 from seatrack.simulate.tma import classic_scenario
-from tma_samples import HEADER, write_bearings
+from tma_samples import HEADER
+from tma_samples import write_bearings
 
 SC = classic_scenario()
 

@@ -3,7 +3,10 @@ import csv
 import numpy as np
 
 from cli_inprocess import seatrack
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 
 
 def _seatrack(*args, cwd):
@@ -145,7 +148,8 @@ def test_output_checked_before_work_and_written_atomically(tmp_path):
 
 
 def test_two_d_plots_give_empty_z_columns_for_every_method(tmp_path):
-    from seatrack.filters.registry import METHODS, method_class
+    from seatrack.filters.registry import METHODS
+    from seatrack.filters.registry import method_class
 
     _ok_plots(tmp_path / "p.csv")
     for method in METHODS:

@@ -6,8 +6,10 @@ import numpy as np
 import pytest
 
 from cli_inprocess import seatrack
-from seatrack.io.multitarget import track_unlabelled, write_unlabelled_plots
-from seatrack.simulate.multitarget import TargetPopulation, simulate_multitarget
+from seatrack.io.multitarget import track_unlabelled
+from seatrack.io.multitarget import write_unlabelled_plots
+from seatrack.simulate.multitarget import TargetPopulation
+from seatrack.simulate.multitarget import simulate_multitarget
 from seatrack.simulate.scenarios import SensorConfig
 
 

@@ -5,16 +5,15 @@ import numpy as np
 import pytest
 
 from seatrack import kalman
-from seatrack.evaluate.bounds import (
-    crb_deterministic,
-    fisher_crb,
-    fisher_information,
-    pcrb,
-    pcrb_linear,
-)
+from seatrack.evaluate.bounds import crb_deterministic
+from seatrack.evaluate.bounds import fisher_crb
+from seatrack.evaluate.bounds import fisher_information
+from seatrack.evaluate.bounds import pcrb
+from seatrack.evaluate.bounds import pcrb_linear
 from seatrack.information import SingularMatrixError
 from seatrack.models.measurement import Bearing
-from seatrack.models.motion import cv_noise, cv_transition
+from seatrack.models.motion import cv_noise
+from seatrack.models.motion import cv_transition
 
 
 def test_fisher_crb_by_hand():

@@ -5,10 +5,13 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
+from hypothesis import settings
 from hypothesis import strategies as st
 
-from seatrack.evaluate.multitarget import gospa, ospa, score_run
+from seatrack.evaluate.multitarget import gospa
+from seatrack.evaluate.multitarget import ospa
+from seatrack.evaluate.multitarget import score_run
 
 
 def _gospa_brute(X, Y, c, p):

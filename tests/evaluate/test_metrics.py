@@ -8,20 +8,19 @@ from scipy import stats
 
 from seatrack import kalman
 from seatrack.evaluate.bounds import pcrb_linear
-from seatrack.evaluate.metrics import (
-    anees,
-    anis,
-    chi2_interval,
-    fraction_inside,
-    nees,
-    nis,
-    peak_error,
-    position_error,
-    rms_over_time,
-    rmse,
-    velocity_error,
-)
-from seatrack.models.motion import cv_noise, cv_transition
+from seatrack.evaluate.metrics import anees
+from seatrack.evaluate.metrics import anis
+from seatrack.evaluate.metrics import chi2_interval
+from seatrack.evaluate.metrics import fraction_inside
+from seatrack.evaluate.metrics import nees
+from seatrack.evaluate.metrics import nis
+from seatrack.evaluate.metrics import peak_error
+from seatrack.evaluate.metrics import position_error
+from seatrack.evaluate.metrics import rms_over_time
+from seatrack.evaluate.metrics import rmse
+from seatrack.evaluate.metrics import velocity_error
+from seatrack.models.motion import cv_noise
+from seatrack.models.motion import cv_transition
 
 
 def _spd(rng, n, batch=()):

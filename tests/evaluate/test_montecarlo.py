@@ -6,7 +6,11 @@ import functools
 import numpy as np
 import pytest
 
-from seatrack.evaluate.montecarlo import Column, format_table, monte_carlo, rich_table, run_seeds
+from seatrack.evaluate.montecarlo import Column
+from seatrack.evaluate.montecarlo import format_table
+from seatrack.evaluate.montecarlo import monte_carlo
+from seatrack.evaluate.montecarlo import rich_table
+from seatrack.evaluate.montecarlo import run_seeds
 
 
 def draw(rng, run, size=3):

@@ -5,15 +5,15 @@ import numpy as np
 import pytest
 
 from seatrack.evaluate.montecarlo import MonteCarloResult
-from seatrack.evaluate.tracking import (
-    compare_methods,
-    method_config,
-    position_crb,
-    run_methods,
-    summarize,
-    tracking_sensor,
-)
-from seatrack.simulate.scenarios import bundled_scenario, load_scenario, parse_scenario
+from seatrack.evaluate.tracking import compare_methods
+from seatrack.evaluate.tracking import method_config
+from seatrack.evaluate.tracking import position_crb
+from seatrack.evaluate.tracking import run_methods
+from seatrack.evaluate.tracking import summarize
+from seatrack.evaluate.tracking import tracking_sensor
+from seatrack.simulate.scenarios import bundled_scenario
+from seatrack.simulate.scenarios import load_scenario
+from seatrack.simulate.scenarios import parse_scenario
 
 CV = {
     "duration_s": 120.0,

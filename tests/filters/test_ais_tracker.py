@@ -10,22 +10,28 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ais_samples import FILES, data_file
+from ais_samples import FILES
+from ais_samples import data_file
 from seatrack.evaluate.holdout import ais_holdout
-from seatrack.filters.ais import (
-    AisTrackerConfig,
-    ct_step,
-    position_noise,
-    sogcog_model,
-    timestamp_offsets,
-    track_reports,
-    track_vessels,
-)
-from seatrack.geometry import KNOT_MPS, angle_diff, bearing, local_frames
-from seatrack.io.ais import AisReports, read_ais_csv
+from seatrack.filters.ais import AisTrackerConfig
+from seatrack.filters.ais import ct_step
+from seatrack.filters.ais import position_noise
+from seatrack.filters.ais import sogcog_model
+from seatrack.filters.ais import timestamp_offsets
+from seatrack.filters.ais import track_reports
+from seatrack.filters.ais import track_vessels
+from seatrack.geometry import KNOT_MPS
+from seatrack.geometry import angle_diff
+from seatrack.geometry import bearing
+from seatrack.geometry import local_frames
+from seatrack.io.ais import AisReports
+from seatrack.io.ais import read_ais_csv
 from seatrack.models import numerical_jacobian
-from seatrack.models.motion import ct_jacobian, ct_noise, ct_transition
-from seatrack.simulate import Leg, trajectory
+from seatrack.models.motion import ct_jacobian
+from seatrack.models.motion import ct_noise
+from seatrack.models.motion import ct_transition
+from seatrack.simulate import Leg
+from seatrack.simulate import trajectory
 
 CFG = AisTrackerConfig()
 
@@ -640,7 +646,8 @@ def test_real_states_stay_within_physical_limits(name: str) -> None:
 def test_vessel_groups_share_the_offset_prior_and_equal_one_table() -> None:
     """Tracking vessels in groups (bounded memory, Dask partitions) gives the result of one
     table: the timestamp-offset prior is estimated from the counts of all groups."""
-    from seatrack.filters.ais.tracker import VesselInputs, track_vessel_groups
+    from seatrack.filters.ais.tracker import VesselInputs
+    from seatrack.filters.ais.tracker import track_vessel_groups
 
     r, _ = tracked("dk_northsea_20221101_1h_selected.csv")
     ok = r.valid
@@ -657,7 +664,8 @@ def test_vessel_groups_share_the_offset_prior_and_equal_one_table() -> None:
 
 
 def test_vessel_rows_layout_and_largest_vessel_per_chunk():
-    from seatrack.filters.ais.kernel import largest_vessel, vessel_rows
+    from seatrack.filters.ais.kernel import largest_vessel
+    from seatrack.filters.ais.kernel import vessel_rows
 
     vessel = np.array([0, 0, 0, 4, 7, 7], dtype=np.int64)
     starts, chunks, t, xy, mask = vessel_rows(vessel, [0, 1, 2, 3, 4, 5], np.zeros((6, 2)), [1] * 6)
@@ -668,7 +676,9 @@ def test_vessel_rows_layout_and_largest_vessel_per_chunk():
 
 
 def test_take_rows_keeps_whole_vessels_and_recomputes_their_boundaries():
-    from seatrack.filters.ais.kernel import KernelInputs, take_rows, vessel_index
+    from seatrack.filters.ais.kernel import KernelInputs
+    from seatrack.filters.ais.kernel import take_rows
+    from seatrack.filters.ais.kernel import vessel_index
 
     n = 6
     starts = np.array([0, 3, 4, 6], dtype=np.int64)

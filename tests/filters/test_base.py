@@ -3,18 +3,17 @@
 import numpy as np
 import pytest
 
-from seatrack.filters.base import (
-    Plots,
-    PlotStatus,
-    SensorNoise,
-    TrackState,
-    common_columns,
-    finish_update,
-    plot_gaussian,
-    two_point_gaussian,
-)
+from seatrack.filters.base import Plots
+from seatrack.filters.base import PlotStatus
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import TrackState
+from seatrack.filters.base import common_columns
+from seatrack.filters.base import finish_update
+from seatrack.filters.base import plot_gaussian
+from seatrack.filters.base import two_point_gaussian
 from seatrack.filters.driver import run_tracks
-from seatrack.filters.ekf import EKF, EKFConfig
+from seatrack.filters.ekf import EKF
+from seatrack.filters.ekf import EKFConfig
 
 
 def _state(B, n=4, seed=0):

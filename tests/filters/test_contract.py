@@ -14,8 +14,14 @@ import numpy as np
 import pytest
 
 from seatrack.filters import registry
-from seatrack.filters.base import COMMON_COLUMNS, Plots, PlotStatus, RecursiveFilter
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.filters.base import COMMON_COLUMNS
+from seatrack.filters.base import Plots
+from seatrack.filters.base import PlotStatus
+from seatrack.filters.base import RecursiveFilter
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 
 METHODS = list(registry.METHODS)
 SIGMA = (15.0, math.radians(0.3), math.radians(0.3), 1.0)

@@ -5,9 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from seatrack.evaluate.metrics import chi2_interval, nees
-from seatrack.filters.converted import convert_plots, polar_jacobian
-from seatrack.geometry import cart_to_spherical, polar_to_cart, spherical_to_cart
+from seatrack.evaluate.metrics import chi2_interval
+from seatrack.evaluate.metrics import nees
+from seatrack.filters.converted import convert_plots
+from seatrack.filters.converted import polar_jacobian
+from seatrack.geometry import cart_to_spherical
+from seatrack.geometry import polar_to_cart
+from seatrack.geometry import spherical_to_cart
 from seatrack.models import numerical_jacobian
 
 

@@ -6,9 +6,14 @@ import numpy as np
 import pytest
 
 from seatrack.filters import registry
-from seatrack.filters.base import Plots, SensorNoise, plot_gaussian
-from seatrack.filters.driver import GROSS_NIS, RESTART_AFTER, run_tracks
-from seatrack.filters.ekf import EKF, EKFConfig
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import plot_gaussian
+from seatrack.filters.driver import GROSS_NIS
+from seatrack.filters.driver import RESTART_AFTER
+from seatrack.filters.driver import run_tracks
+from seatrack.filters.ekf import EKF
+from seatrack.filters.ekf import EKFConfig
 
 SENSOR = SensorNoise(sigma_range=20.0, sigma_azimuth=math.radians(0.3))
 

@@ -3,8 +3,13 @@ from dataclasses import replace
 import numpy as np
 
 from seatrack.filters.base import Plots
-from seatrack.filters.registry import COMMON_COLUMNS, build, run
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.filters.registry import COMMON_COLUMNS
+from seatrack.filters.registry import build
+from seatrack.filters.registry import run
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 from seatrack.simulate.files import plots_from_measurements
 
 

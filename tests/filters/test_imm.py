@@ -1,11 +1,18 @@
 import numpy as np
 import pytest
-from filterpy.kalman import IMMEstimator, KalmanFilter
+from filterpy.kalman import IMMEstimator
+from filterpy.kalman import KalmanFilter
 
 from seatrack import kalman
 from seatrack.filters.imm import IMM
-from seatrack.models import ConstantVelocity, CoordinatedTurn, Position, RangeBearing
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.models import ConstantVelocity
+from seatrack.models import CoordinatedTurn
+from seatrack.models import Position
+from seatrack.models import RangeBearing
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 
 PI = np.array([[0.97, 0.03], [0.05, 0.95]])  # [i, j] = P(j | i); FilterPy's M is the same
 
@@ -181,7 +188,8 @@ def _turn_plots(seed: int = 0):
 
 
 def _run(flt, plots, speed=30.0):
-    from seatrack.filters.base import SensorNoise, plot_gaussian
+    from seatrack.filters.base import SensorNoise
+    from seatrack.filters.base import plot_gaussian
     from seatrack.filters.driver import run_tracks
 
     sensor = SensorNoise(10.0, 0.002)
@@ -193,7 +201,8 @@ def _run(flt, plots, speed=30.0):
 def test_filter_imm_of_two_identical_filters_is_the_filter():
     """Mixing two copies of one filter must give that filter exactly."""
     from seatrack.filters.base import SensorNoise
-    from seatrack.filters.ekf import EKF, EKFConfig
+    from seatrack.filters.ekf import EKF
+    from seatrack.filters.ekf import EKFConfig
     from seatrack.filters.imm import FilterIMM
 
     _, plots = _turn_plots()
@@ -212,9 +221,11 @@ def test_filter_imm_of_two_identical_filters_is_the_filter():
 def test_filter_imm_of_turning_filter_and_cv_ekf():
     """Issue 14: an IMM whose models are the turning filter and a CV EKF."""
     from seatrack.filters.base import SensorNoise
-    from seatrack.filters.ekf import EKF, EKFConfig
+    from seatrack.filters.ekf import EKF
+    from seatrack.filters.ekf import EKFConfig
     from seatrack.filters.imm import FilterIMM
-    from seatrack.filters.turning import Turning, TurningConfig
+    from seatrack.filters.turning import Turning
+    from seatrack.filters.turning import TurningConfig
 
     tr, plots = _turn_plots(1)
     sensor = SensorNoise(10.0, 0.002)

@@ -10,29 +10,35 @@ import math
 
 import numpy as np
 import pytest
-from scipy import integrate, stats
+from scipy import integrate
+from scipy import stats
 
-from seatrack.config import ConfigError, parse_config
+from seatrack.config import ConfigError
+from seatrack.config import parse_config
 from seatrack.filters import registry
-from seatrack.filters.base import Plots, SensorNoise, plot_gaussian
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import plot_gaussian
 from seatrack.filters.driver import run_tracks
-from seatrack.filters.levels import (
-    LADDER,
-    ContaminatedConfig,
-    ContaminatedLevels,
-    HuberLevels,
-    LevelConfig,
-    LevelIMM,
-    LevelIMMConfig,
-    StudentTLevels,
-    contaminated_loglik,
-    level_noise,
-    mixture_update,
-    outlier_patterns,
-    student_t_logpdf,
-)
-from seatrack.models.targets import AIRCRAFT, SHIP
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.filters.levels import LADDER
+from seatrack.filters.levels import ContaminatedConfig
+from seatrack.filters.levels import ContaminatedLevels
+from seatrack.filters.levels import HuberLevels
+from seatrack.filters.levels import LevelConfig
+from seatrack.filters.levels import LevelIMM
+from seatrack.filters.levels import LevelIMMConfig
+from seatrack.filters.levels import StudentTLevels
+from seatrack.filters.levels import contaminated_loglik
+from seatrack.filters.levels import level_noise
+from seatrack.filters.levels import mixture_update
+from seatrack.filters.levels import outlier_patterns
+from seatrack.filters.levels import student_t_logpdf
+from seatrack.models.targets import AIRCRAFT
+from seatrack.models.targets import SHIP
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 
 SENSOR = SensorNoise(10.0, math.radians(0.3))
 

@@ -15,28 +15,30 @@ import numpy as np
 import pytest
 
 from seatrack import kalman
-from seatrack.filters.base import Plots, PlotStatus, SensorNoise, usable, wrap_angles
+from seatrack.filters.base import Plots
+from seatrack.filters.base import PlotStatus
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import usable
+from seatrack.filters.base import wrap_angles
 from seatrack.filters.ekf import sensor_state
-from seatrack.filters.imm import IMMState, combine, mix
-from seatrack.filters.levels import (
-    ContaminatedConfig,
-    ContaminatedLevels,
-    HuberLevels,
-    LevelIMM,
-    LevelIMMConfig,
-    RamazanovLevels,
-    StudentTLevels,
-    contaminated_loglik,
-    level_noise,
-    mixture_update,
-    student_t_logpdf,
-)
+from seatrack.filters.imm import IMMState
+from seatrack.filters.imm import combine
+from seatrack.filters.imm import mix
+from seatrack.filters.levels import ContaminatedConfig
+from seatrack.filters.levels import ContaminatedLevels
+from seatrack.filters.levels import HuberLevels
+from seatrack.filters.levels import LevelIMM
+from seatrack.filters.levels import LevelIMMConfig
+from seatrack.filters.levels import RamazanovLevels
+from seatrack.filters.levels import StudentTLevels
+from seatrack.filters.levels import contaminated_loglik
+from seatrack.filters.levels import level_noise
+from seatrack.filters.levels import mixture_update
+from seatrack.filters.levels import student_t_logpdf
 from seatrack.filters.levels_kernel import Rule
-from seatrack.filters.robust_baselines import (
-    HuberConfig,
-    StudentTConfig,
-    reweighted_update,
-)
+from seatrack.filters.robust_baselines import HuberConfig
+from seatrack.filters.robust_baselines import StudentTConfig
+from seatrack.filters.robust_baselines import reweighted_update
 from seatrack.models.measurement import polar_measurement
 from seatrack.models.motion import cv_matrices
 

@@ -7,17 +7,19 @@ import pytest
 from scipy.special import logsumexp
 
 from seatrack import kalman
-from seatrack.evaluate.metrics import chi2_interval, nees
-from seatrack.filters.multimodel import (
-    DEFAULT_ALPHAS,
-    MultiModelConfig,
-    MultiModelFilter,
-    MultiModelState,
-    range_rate_row,
-)
+from seatrack.evaluate.metrics import chi2_interval
+from seatrack.evaluate.metrics import nees
+from seatrack.filters.multimodel import DEFAULT_ALPHAS
+from seatrack.filters.multimodel import MultiModelConfig
+from seatrack.filters.multimodel import MultiModelFilter
+from seatrack.filters.multimodel import MultiModelState
+from seatrack.filters.multimodel import range_rate_row
 from seatrack.models import numerical_jacobian
 from seatrack.models.measurement import range_rate
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 
 
 # ---------------------------------------------------------------------------

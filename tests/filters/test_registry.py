@@ -17,12 +17,22 @@ import pytest
 
 from seatrack.config import ConfigError
 from seatrack.filters import registry
-from seatrack.filters.base import Plots, SensorNoise, plot_gaussian
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import plot_gaussian
 from seatrack.filters.converted import convert_plots
-from seatrack.filters.multimodel import DEFAULT_ALPHAS, MultiModelFilter, MultiModelState
+from seatrack.filters.multimodel import DEFAULT_ALPHAS
+from seatrack.filters.multimodel import MultiModelFilter
+from seatrack.filters.multimodel import MultiModelState
 from seatrack.filters.robust import robust_update
-from seatrack.models.targets import AIRCRAFT, FIGHTER, SHIP, TARGET_CLASSES
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.models.targets import AIRCRAFT
+from seatrack.models.targets import FIGHTER
+from seatrack.models.targets import SHIP
+from seatrack.models.targets import TARGET_CLASSES
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 
 SPEC = {
     "turning": "Turning",

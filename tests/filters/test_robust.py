@@ -4,30 +4,34 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
+from hypothesis import settings
 from hypothesis import strategies as st
 
 from seatrack.evaluate.metrics import position_error
-from seatrack.filters.robust import (
-    BeamState,
-    RobustConfig,
-    SonarModel,
-    axis_noise,
-    axis_transition,
-    beam_innovations,
-    beam_to_cartesian_cov,
-    cartesian_to_beam_state,
-    initial_state,
-    per_axis_to_flat,
-    robust_filter,
-    robust_step,
-    robust_variance,
-    rotate_blocks,
-)
+from seatrack.filters.robust import BeamState
+from seatrack.filters.robust import RobustConfig
+from seatrack.filters.robust import SonarModel
+from seatrack.filters.robust import axis_noise
+from seatrack.filters.robust import axis_transition
+from seatrack.filters.robust import beam_innovations
+from seatrack.filters.robust import beam_to_cartesian_cov
+from seatrack.filters.robust import cartesian_to_beam_state
+from seatrack.filters.robust import initial_state
+from seatrack.filters.robust import per_axis_to_flat
+from seatrack.filters.robust import robust_filter
+from seatrack.filters.robust import robust_step
+from seatrack.filters.robust import robust_variance
+from seatrack.filters.robust import rotate_blocks
 from seatrack.filters.robust_baselines import ekf_filter
-from seatrack.geometry import bearing, polar_to_cart, rotation_to_beam
-from seatrack.models.motion import ca_transition, cv_noise_discrete, cv_transition
-from seatrack.simulate.marine import MarineScenario, simulate_runs
+from seatrack.geometry import bearing
+from seatrack.geometry import polar_to_cart
+from seatrack.geometry import rotation_to_beam
+from seatrack.models.motion import ca_transition
+from seatrack.models.motion import cv_noise_discrete
+from seatrack.models.motion import cv_transition
+from seatrack.simulate.marine import MarineScenario
+from seatrack.simulate.marine import simulate_runs
 
 angles = st.floats(-10.0, 10.0, allow_nan=False)
 

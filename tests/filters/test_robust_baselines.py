@@ -6,16 +6,17 @@ import numpy as np
 import pytest
 
 from seatrack.evaluate.metrics import position_error
-from seatrack.filters.robust import SonarModel, robust_filter
-from seatrack.filters.robust_baselines import (
-    HuberConfig,
-    StudentTConfig,
-    clairvoyant_filter,
-    ekf_filter,
-    huber_filter,
-    student_t_filter,
-)
-from seatrack.simulate.marine import MarineScenario, SonarRuns, simulate_runs
+from seatrack.filters.robust import SonarModel
+from seatrack.filters.robust import robust_filter
+from seatrack.filters.robust_baselines import HuberConfig
+from seatrack.filters.robust_baselines import StudentTConfig
+from seatrack.filters.robust_baselines import clairvoyant_filter
+from seatrack.filters.robust_baselines import ekf_filter
+from seatrack.filters.robust_baselines import huber_filter
+from seatrack.filters.robust_baselines import student_t_filter
+from seatrack.simulate.marine import MarineScenario
+from seatrack.simulate.marine import SonarRuns
+from seatrack.simulate.marine import simulate_runs
 
 
 def _rmse(est, runs: SonarRuns, skip: int = 10) -> float:

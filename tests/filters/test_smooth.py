@@ -8,12 +8,20 @@ import math
 import numpy as np
 
 from seatrack import kalman
-from seatrack.filters.base import Plots, SensorNoise, plot_gaussian
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import plot_gaussian
 from seatrack.filters.driver import run_tracks
-from seatrack.filters.ekf import EKF, EKFConfig
-from seatrack.filters.smooth import rts_smooth, smooth_track
-from seatrack.models.motion import cv_noise, cv_transition
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.filters.ekf import EKF
+from seatrack.filters.ekf import EKFConfig
+from seatrack.filters.smooth import rts_smooth
+from seatrack.filters.smooth import smooth_track
+from seatrack.models.motion import cv_noise
+from seatrack.models.motion import cv_transition
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 
 
 def _linear_track(seed: int, K: int = 12):

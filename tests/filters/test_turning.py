@@ -12,10 +12,14 @@ from seatrack import kalman
 from seatrack.filters import heading as Hd
 from seatrack.filters import turning as T
 from seatrack.filters.base import SensorNoise
-from seatrack.geometry import spherical_to_cart, wrap_pi
+from seatrack.geometry import spherical_to_cart
+from seatrack.geometry import wrap_pi
 from seatrack.models import numerical_jacobian
 from seatrack.models.motion import cv_noise
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 
 DEG = math.pi / 180
 

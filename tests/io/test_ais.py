@@ -8,18 +8,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ais_samples import FILES, data_file
-from seatrack.geometry import local_frames, local_to_geodetic
-from seatrack.io.ais import (
-    REJECT_REASONS,
-    detect_schema,
-    output_order,
-    parse_times,
-    read_ais,
-    read_ais_csv,
-    rejection_counts,
-    write_tracks_csv,
-)
+from ais_samples import FILES
+from ais_samples import data_file
+from seatrack.geometry import local_frames
+from seatrack.geometry import local_to_geodetic
+from seatrack.io.ais import REJECT_REASONS
+from seatrack.io.ais import detect_schema
+from seatrack.io.ais import output_order
+from seatrack.io.ais import parse_times
+from seatrack.io.ais import read_ais
+from seatrack.io.ais import read_ais_csv
+from seatrack.io.ais import rejection_counts
+from seatrack.io.ais import write_tracks_csv
 from seatrack.io.table import InputError
 
 

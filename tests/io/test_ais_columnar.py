@@ -14,7 +14,8 @@ import pytest
 
 from ais_samples import data_file
 from seatrack.io.ais import read_ais_csv
-from seatrack.io.ais.columnar import NotColumnar, iter_csv_blocks
+from seatrack.io.ais.columnar import NotColumnar
+from seatrack.io.ais.columnar import iter_csv_blocks
 
 DMA_HEAD = (
     "# Timestamp,Type of mobile,MMSI,Latitude,Longitude,Navigational status,ROT,SOG,COG,"

@@ -6,7 +6,10 @@ import sys
 
 import pytest
 
-from seatrack.io.atomic import OutputError, atomic_path, atomic_write, check_output_path
+from seatrack.io.atomic import OutputError
+from seatrack.io.atomic import atomic_path
+from seatrack.io.atomic import atomic_write
+from seatrack.io.atomic import check_output_path
 
 
 def test_success_replaces_and_leaves_no_temporary(tmp_path):

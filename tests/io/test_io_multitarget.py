@@ -5,16 +5,15 @@ import csv
 import numpy as np
 import pytest
 
-from seatrack.filters.base import Plots, SensorNoise
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
 from seatrack.filters.registry import METHODS
-from seatrack.io.multitarget import (
-    has_track_column,
-    make_filter,
-    read_unlabelled_plots,
-    write_plot_labels,
-    write_tracks,
-    write_unlabelled_plots,
-)
+from seatrack.io.multitarget import has_track_column
+from seatrack.io.multitarget import make_filter
+from seatrack.io.multitarget import read_unlabelled_plots
+from seatrack.io.multitarget import write_plot_labels
+from seatrack.io.multitarget import write_tracks
+from seatrack.io.multitarget import write_unlabelled_plots
 from seatrack.io.table import InputError
 from seatrack.tracking import MultiTargetTracker
 from seatrack.tracking.adaptive import NoiseLevels
@@ -121,7 +120,8 @@ def test_outputs_account_for_every_plot(tmp_path):
 
 def _radar_file(path, seed):
     """A small unlabelled scenario with range rate (so that every method can run)."""
-    from seatrack.simulate.multitarget import TargetPopulation, simulate_multitarget
+    from seatrack.simulate.multitarget import TargetPopulation
+    from seatrack.simulate.multitarget import simulate_multitarget
     from seatrack.simulate.scenarios import SensorConfig
 
     radar = SensorConfig(

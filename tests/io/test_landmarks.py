@@ -6,7 +6,10 @@ import numpy as np
 import pytest
 
 from seatrack.geometry import enu_to_geodetic
-from seatrack.io.landmarks import decode_records, encode_records, read_map_csv, write_map_csv
+from seatrack.io.landmarks import decode_records
+from seatrack.io.landmarks import encode_records
+from seatrack.io.landmarks import read_map_csv
+from seatrack.io.landmarks import write_map_csv
 from seatrack.io.table import InputError
 from seatrack.navigation.landmarks import LandmarkMap
 

@@ -7,7 +7,10 @@ import os
 import numpy as np
 import pytest
 
-from seatrack.io.navigation import read_echoes, read_gyro, write_echoes, write_gyro
+from seatrack.io.navigation import read_echoes
+from seatrack.io.navigation import read_gyro
+from seatrack.io.navigation import write_echoes
+from seatrack.io.navigation import write_gyro
 from seatrack.io.table import InputError
 
 

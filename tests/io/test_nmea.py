@@ -9,7 +9,9 @@ from pyais.encode import encode_dict
 from pyais.util import compute_checksum
 
 from ais_samples import data_file
-from seatrack.io.ais import format_times, read_ais, read_ais_csv
+from seatrack.io.ais import format_times
+from seatrack.io.ais import read_ais
+from seatrack.io.ais import read_ais_csv
 from seatrack.io.ais.nmea import nmea_checksum
 from seatrack.io.ais.read import looks_like_nmea
 from seatrack.io.ais.read import read_ais_csv as read_nmea

@@ -1,7 +1,8 @@
 import numpy as np
 import pytest
 
-from seatrack.io.plots import read_plot_tracks, read_plots
+from seatrack.io.plots import read_plot_tracks
+from seatrack.io.plots import read_plots
 from seatrack.io.table import InputError
 
 

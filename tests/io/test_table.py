@@ -1,21 +1,19 @@
 import numpy as np
 import pytest
 
-from seatrack.io.table import (
-    Check,
-    InputError,
-    angle_deg,
-    between,
-    check_times,
-    decode_text,
-    latitude,
-    longitude,
-    positive,
-    read_csv_table,
-    seconds,
-    sigma,
-    unix_seconds,
-)
+from seatrack.io.table import Check
+from seatrack.io.table import InputError
+from seatrack.io.table import angle_deg
+from seatrack.io.table import between
+from seatrack.io.table import check_times
+from seatrack.io.table import decode_text
+from seatrack.io.table import latitude
+from seatrack.io.table import longitude
+from seatrack.io.table import positive
+from seatrack.io.table import read_csv_table
+from seatrack.io.table import seconds
+from seatrack.io.table import sigma
+from seatrack.io.table import unix_seconds
 
 
 def _write(tmp_path, text, name="m.csv"):

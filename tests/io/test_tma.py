@@ -10,16 +10,16 @@ import numpy as np
 import pytest
 
 from seatrack.io.table import InputError
-from seatrack.io.tma import (
-    read_bearings,
-    read_support,
-    result_json,
-    solution_summary,
-    solution_to_dict,
-)
+from seatrack.io.tma import read_bearings
+from seatrack.io.tma import read_support
+from seatrack.io.tma import result_json
+from seatrack.io.tma import solution_summary
+from seatrack.io.tma import solution_to_dict
 from seatrack.simulate.tma import classic_scenario
-from seatrack.tma import TMAConfig, solve
-from tma_samples import HEADER, write_bearings
+from seatrack.tma import TMAConfig
+from seatrack.tma import solve
+from tma_samples import HEADER
+from tma_samples import write_bearings
 
 SC = classic_scenario()
 

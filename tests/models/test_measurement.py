@@ -1,15 +1,13 @@
 import numpy as np
 import pytest
 
-from seatrack.models import (
-    Bearing,
-    Position,
-    RangeBearing,
-    RangeBearingElevation,
-    RangeRate,
-    Stacked,
-    numerical_jacobian,
-)
+from seatrack.models import Bearing
+from seatrack.models import Position
+from seatrack.models import RangeBearing
+from seatrack.models import RangeBearingElevation
+from seatrack.models import RangeRate
+from seatrack.models import Stacked
+from seatrack.models import numerical_jacobian
 
 rng = np.random.default_rng(7)
 

@@ -1,22 +1,19 @@
 import numpy as np
 import pytest
 
-from seatrack.models import (
-    ConstantAcceleration,
-    ConstantVelocity,
-    CoordinatedTurn,
-    numerical_jacobian,
-)
-from seatrack.models.motion import (
-    ca_transition,
-    ct_jacobian,
-    ct_noise,
-    ct_transition,
-    cv_noise,
-    cv_noise_discrete,
-    cv_transition,
-)
-from seatrack.simulate import Leg, trajectory
+from seatrack.models import ConstantAcceleration
+from seatrack.models import ConstantVelocity
+from seatrack.models import CoordinatedTurn
+from seatrack.models import numerical_jacobian
+from seatrack.models.motion import ca_transition
+from seatrack.models.motion import ct_jacobian
+from seatrack.models.motion import ct_noise
+from seatrack.models.motion import ct_transition
+from seatrack.models.motion import cv_noise
+from seatrack.models.motion import cv_noise_discrete
+from seatrack.models.motion import cv_transition
+from seatrack.simulate import Leg
+from seatrack.simulate import trajectory
 
 
 def test_cv_transition_propagates_position():

@@ -8,17 +8,15 @@ import math
 import numpy as np
 import pytest
 
-from seatrack.models.targets import (
-    AIRCRAFT,
-    FIGHTER,
-    SHIP,
-    SUBMARINE,
-    TARGET_CLASSES,
-    cv_steady_state,
-    predicted_mse,
-    suggest_parameters,
-    target_class,
-)
+from seatrack.models.targets import AIRCRAFT
+from seatrack.models.targets import FIGHTER
+from seatrack.models.targets import SHIP
+from seatrack.models.targets import SUBMARINE
+from seatrack.models.targets import TARGET_CLASSES
+from seatrack.models.targets import cv_steady_state
+from seatrack.models.targets import predicted_mse
+from seatrack.models.targets import suggest_parameters
+from seatrack.models.targets import target_class
 
 DEG = math.pi / 180
 

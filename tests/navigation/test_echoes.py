@@ -7,14 +7,12 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from seatrack.navigation.echoes import (
-    GateConfig,
-    adaptive_half_angle,
-    echo_weights,
-    gate_mask,
-    local_offsets,
-    weighted_measurement,
-)
+from seatrack.navigation.echoes import GateConfig
+from seatrack.navigation.echoes import adaptive_half_angle
+from seatrack.navigation.echoes import echo_weights
+from seatrack.navigation.echoes import gate_mask
+from seatrack.navigation.echoes import local_offsets
+from seatrack.navigation.echoes import weighted_measurement
 
 S = np.diag([3.5**2 + 25.0, 10.0**2 + 25.0])  # echo spread + h A h^T, m^2
 R_C = 1000.0

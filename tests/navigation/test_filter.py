@@ -8,22 +8,20 @@ import pytest
 from seatrack.filters.base import PlotStatus
 from seatrack.models import numerical_jacobian
 from seatrack.models.motion import cv_noise
-from seatrack.navigation.filter import (
-    KalmanNav,
-    ProcessNoise,
-    SRIFNav,
-    compass_row,
-    contour_measurement,
-    contour_row,
-    gnss_rows,
-    gyro_row,
-    landmark_geometry,
-    log_speed,
-    nav_noise,
-    nav_transition,
-    point_measurement,
-    point_rows,
-)
+from seatrack.navigation.filter import KalmanNav
+from seatrack.navigation.filter import ProcessNoise
+from seatrack.navigation.filter import SRIFNav
+from seatrack.navigation.filter import compass_row
+from seatrack.navigation.filter import contour_measurement
+from seatrack.navigation.filter import contour_row
+from seatrack.navigation.filter import gnss_rows
+from seatrack.navigation.filter import gyro_row
+from seatrack.navigation.filter import landmark_geometry
+from seatrack.navigation.filter import log_speed
+from seatrack.navigation.filter import nav_noise
+from seatrack.navigation.filter import nav_transition
+from seatrack.navigation.filter import point_measurement
+from seatrack.navigation.filter import point_rows
 
 STATES = [
     np.array([120.0, -40.0, np.radians(30.0), 2.0, 3.5, np.radians(0.8)]),

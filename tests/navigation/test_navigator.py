@@ -9,13 +9,14 @@ import numpy as np
 import pytest
 
 from seatrack.geometry import wrap_pi
-from seatrack.navigation.navigator import AuxData, Echoes, NavigatorConfig, navigate
-from seatrack.simulate.radar_echoes import (
-    EchoEnvironment,
-    channel_landmarks,
-    river_route,
-    simulate_radar,
-)
+from seatrack.navigation.navigator import AuxData
+from seatrack.navigation.navigator import Echoes
+from seatrack.navigation.navigator import NavigatorConfig
+from seatrack.navigation.navigator import navigate
+from seatrack.simulate.radar_echoes import EchoEnvironment
+from seatrack.simulate.radar_echoes import channel_landmarks
+from seatrack.simulate.radar_echoes import river_route
+from seatrack.simulate.radar_echoes import simulate_radar
 
 ROUTE = river_route(2000.0, 4.0)  # 500 s with five turns
 LMS = channel_landmarks(ROUTE, 8, np.random.default_rng(1))

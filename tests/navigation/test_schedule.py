@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from seatrack.navigation.schedule import ScheduleConfig, next_landmark
+from seatrack.navigation.schedule import ScheduleConfig
+from seatrack.navigation.schedule import next_landmark
 
 D = np.radians
 

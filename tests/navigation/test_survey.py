@@ -4,14 +4,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from seatrack.navigation.navigator import AuxData, Echoes, NavigatorConfig, navigate
-from seatrack.navigation.survey import SurveyConfig, survey
-from seatrack.simulate.radar_echoes import (
-    EchoEnvironment,
-    channel_landmarks,
-    river_route,
-    simulate_radar,
-)
+from seatrack.navigation.navigator import AuxData
+from seatrack.navigation.navigator import Echoes
+from seatrack.navigation.navigator import NavigatorConfig
+from seatrack.navigation.navigator import navigate
+from seatrack.navigation.survey import SurveyConfig
+from seatrack.navigation.survey import survey
+from seatrack.simulate.radar_echoes import EchoEnvironment
+from seatrack.simulate.radar_echoes import channel_landmarks
+from seatrack.simulate.radar_echoes import river_route
+from seatrack.simulate.radar_echoes import simulate_radar
 
 ROUTE = river_route(2000.0, 4.0)
 TRUE = channel_landmarks(ROUTE, 8, np.random.default_rng(1))

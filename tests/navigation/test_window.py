@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from seatrack.navigation.window import Window, in_range, settle_window, step_window
+from seatrack.navigation.window import Window
+from seatrack.navigation.window import in_range
+from seatrack.navigation.window import settle_window
+from seatrack.navigation.window import step_window
 
 N = 15  # order numbers 0..14; R1..R14 use 1..14
 

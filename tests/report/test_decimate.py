@@ -5,13 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from seatrack.report.decimate import (
-    budget_tolerance,
-    dp_ranks,
-    mercator,
-    mercator_rows,
-    pixel_size,
-)
+from seatrack.report.decimate import budget_tolerance
+from seatrack.report.decimate import dp_ranks
+from seatrack.report.decimate import mercator
+from seatrack.report.decimate import mercator_rows
+from seatrack.report.decimate import pixel_size
 
 
 def _seg_dist(p: np.ndarray, a: np.ndarray, b: np.ndarray) -> float:

@@ -7,9 +7,14 @@ import base64
 import math
 import re
 
-from seatrack.report.demo import WHEN, Row, Section
-from seatrack.report.demo_page import demo_page, demo_text, write_demo_page
-from seatrack.report.plots import save, situation_figure
+from seatrack.report.demo import WHEN
+from seatrack.report.demo import Row
+from seatrack.report.demo import Section
+from seatrack.report.demo_page import demo_page
+from seatrack.report.demo_page import demo_text
+from seatrack.report.demo_page import write_demo_page
+from seatrack.report.plots import save
+from seatrack.report.plots import situation_figure
 
 
 def _sections(tmp_path):

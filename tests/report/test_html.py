@@ -16,16 +16,15 @@ import numpy as np
 import pytest
 
 from ais_samples import data_file
-from browser import browse, chromium
-from seatrack.report.html import (
-    VesselTrack,
-    geojson,
-    html_page,
-    map_tracks,
-    vessel_tracks,
-    write_geojson,
-    write_html,
-)
+from browser import browse
+from browser import chromium
+from seatrack.report.html import VesselTrack
+from seatrack.report.html import geojson
+from seatrack.report.html import html_page
+from seatrack.report.html import map_tracks
+from seatrack.report.html import vessel_tracks
+from seatrack.report.html import write_geojson
+from seatrack.report.html import write_html
 
 # tiles from a closed local port: they fail at once, whatever network the machine has
 DEAD_TILES = "http://127.0.0.1:9/{z}/{x}/{y}.png"

@@ -8,14 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from seatrack.report.land import (
-    Rings,
-    clip_rings,
-    land_rings,
-    natural_earth_land,
-    rings_from_topojson,
-    topojson_transform,
-)
+from seatrack.report.land import Rings
+from seatrack.report.land import clip_rings
+from seatrack.report.land import land_rings
+from seatrack.report.land import natural_earth_land
+from seatrack.report.land import rings_from_topojson
+from seatrack.report.land import topojson_transform
 
 
 def _area(r: Rings) -> float:

@@ -9,14 +9,12 @@ from typing import Any
 import numpy as np
 import pytest
 
-from seatrack.report.map_page import (
-    OPENSEAMAP_URL,
-    OSM_URL,
-    MapOptions,
-    page_data,
-    render_page,
-    robust_bounds,
-)
+from seatrack.report.map_page import OPENSEAMAP_URL
+from seatrack.report.map_page import OSM_URL
+from seatrack.report.map_page import MapOptions
+from seatrack.report.map_page import page_data
+from seatrack.report.map_page import render_page
+from seatrack.report.map_page import robust_bounds
 
 
 def _undelta(a: list[int]) -> np.ndarray:

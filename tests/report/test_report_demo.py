@@ -6,9 +6,14 @@ import math
 
 import numpy as np
 
-from seatrack.filters.registry import METHODS, run
-from seatrack.report.demo import SECTIONS, WHEN, rmse_rows
-from seatrack.simulate.families import HEADLINE_SEEDS, labelled_runs, random_manoeuvres
+from seatrack.filters.registry import METHODS
+from seatrack.filters.registry import run
+from seatrack.report.demo import SECTIONS
+from seatrack.report.demo import WHEN
+from seatrack.report.demo import rmse_rows
+from seatrack.simulate.families import HEADLINE_SEEDS
+from seatrack.simulate.families import labelled_runs
+from seatrack.simulate.families import random_manoeuvres
 
 
 def test_rows_and_the_hindsight_anchor():

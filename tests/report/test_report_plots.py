@@ -2,7 +2,9 @@
 
 import numpy as np
 
-from seatrack.report.plots import error_figure, save, track_figure
+from seatrack.report.plots import error_figure
+from seatrack.report.plots import save
+from seatrack.report.plots import track_figure
 
 
 def test_track_figure_lines_and_limits(tmp_path):

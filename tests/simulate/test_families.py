@@ -8,23 +8,23 @@ import numpy as np
 import pytest
 from scipy.stats import chi2
 
-from seatrack.geometry import G0, angle_diff, bearing
+from seatrack.geometry import G0
+from seatrack.geometry import angle_diff
+from seatrack.geometry import bearing
 from seatrack.models.measurement import range_rate
 from seatrack.models.targets import target_class
-from seatrack.simulate.families import (
-    ACTIVE_SONAR,
-    COASTAL_RADAR,
-    HEADLINE_SEEDS,
-    MANOEUVRE_SPECS,
-    OUTLIER_SCALE,
-    TUNING_SEEDS,
-    Scenario,
-    ais_replay,
-    ais_stretches,
-    random_manoeuvres,
-    seed_split,
-    weaving,
-)
+from seatrack.simulate.families import ACTIVE_SONAR
+from seatrack.simulate.families import COASTAL_RADAR
+from seatrack.simulate.families import HEADLINE_SEEDS
+from seatrack.simulate.families import MANOEUVRE_SPECS
+from seatrack.simulate.families import OUTLIER_SCALE
+from seatrack.simulate.families import TUNING_SEEDS
+from seatrack.simulate.families import Scenario
+from seatrack.simulate.families import ais_replay
+from seatrack.simulate.families import ais_stretches
+from seatrack.simulate.families import random_manoeuvres
+from seatrack.simulate.families import seed_split
+from seatrack.simulate.families import weaving
 
 DEG = math.pi / 180
 H0 = HEADLINE_SEEDS[0]
@@ -150,7 +150,9 @@ def test_ais_replay(sensor) -> None:
 
 def test_ais_truth_follows_the_real_reports() -> None:
     from seatrack.data import ais_sample
-    from seatrack.io.ais import read_ais_csv, to_local, validate_reports
+    from seatrack.io.ais import read_ais_csv
+    from seatrack.io.ais import to_local
+    from seatrack.io.ais import validate_reports
 
     st = ais_stretches()[0]
     r = validate_reports(read_ais_csv(ais_sample(st.source)))

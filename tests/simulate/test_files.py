@@ -4,17 +4,19 @@ import numpy as np
 import pytest
 
 from seatrack.io.plots import read_plot_tracks
-from seatrack.io.table import InputError, read_csv_table
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
-from seatrack.simulate.files import (
-    BEARING_COLUMNS,
-    plots_from_measurements,
-    read_truth,
-    write_bearings,
-    write_clutter,
-    write_plots,
-    write_truth,
-)
+from seatrack.io.table import InputError
+from seatrack.io.table import read_csv_table
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
+from seatrack.simulate.files import BEARING_COLUMNS
+from seatrack.simulate.files import plots_from_measurements
+from seatrack.simulate.files import read_truth
+from seatrack.simulate.files import write_bearings
+from seatrack.simulate.files import write_clutter
+from seatrack.simulate.files import write_plots
+from seatrack.simulate.files import write_truth
 
 
 def _meas(components, sigma, seed=0, p_detect=0.8, start=(3000.0, 4000.0, 200.0), observer=None):

@@ -5,8 +5,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from seatrack.geometry import angle_diff, bearing, course_speed
-from seatrack.simulate.marine import MarineScenario, simulate_runs
+from seatrack.geometry import angle_diff
+from seatrack.geometry import bearing
+from seatrack.geometry import course_speed
+from seatrack.simulate.marine import MarineScenario
+from seatrack.simulate.marine import simulate_runs
 
 
 def test_geometry_and_noise_of_the_paper() -> None:

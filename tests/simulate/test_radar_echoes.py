@@ -4,16 +4,17 @@ from __future__ import annotations
 
 import numpy as np
 
-from seatrack.geometry import TWO_PI, bearing, wrap_pi
+from seatrack.geometry import TWO_PI
+from seatrack.geometry import bearing
+from seatrack.geometry import wrap_pi
 from seatrack.navigation.landmarks import LandmarkMap
-from seatrack.simulate.radar_echoes import (
-    EchoEnvironment,
-    RadarConfig,
-    channel_landmarks,
-    river_route,
-    simulate_radar,
-)
-from seatrack.simulate.trajectories import Leg, trajectory
+from seatrack.simulate.radar_echoes import EchoEnvironment
+from seatrack.simulate.radar_echoes import RadarConfig
+from seatrack.simulate.radar_echoes import channel_landmarks
+from seatrack.simulate.radar_echoes import river_route
+from seatrack.simulate.radar_echoes import simulate_radar
+from seatrack.simulate.trajectories import Leg
+from seatrack.simulate.trajectories import trajectory
 
 ROUTE = trajectory([0.0, 0.0], 0.0, 4.0, [Leg.straight(200.0), Leg.turn(np.pi / 2, 0.02)], dt=1.0)
 

@@ -5,14 +5,14 @@ import math
 import numpy as np
 import pytest
 
-from seatrack.geometry import G0, KNOT_MPS, geodetic_to_enu
+from seatrack.geometry import G0
+from seatrack.geometry import KNOT_MPS
+from seatrack.geometry import geodetic_to_enu
 from seatrack.io.table import InputError
-from seatrack.simulate.scenarios import (
-    bundled_scenario,
-    bundled_scenarios,
-    load_scenario,
-    resolve_scenario,
-)
+from seatrack.simulate.scenarios import bundled_scenario
+from seatrack.simulate.scenarios import bundled_scenarios
+from seatrack.simulate.scenarios import load_scenario
+from seatrack.simulate.scenarios import resolve_scenario
 
 BASE = """
 name = "t"

@@ -1,7 +1,11 @@
 import numpy as np
 import pytest
 
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory, uniform_clutter
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
+from seatrack.simulate import uniform_clutter
 
 
 def _tracks():

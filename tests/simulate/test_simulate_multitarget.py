@@ -6,8 +6,12 @@ import numpy as np
 import pytest
 
 from seatrack.io.table import InputError
-from seatrack.simulate.multitarget import TargetPopulation, parse_multitarget, simulate_multitarget
-from seatrack.simulate.scenarios import SensorConfig, load_scenario, resolve_scenario
+from seatrack.simulate.multitarget import TargetPopulation
+from seatrack.simulate.multitarget import parse_multitarget
+from seatrack.simulate.multitarget import simulate_multitarget
+from seatrack.simulate.scenarios import SensorConfig
+from seatrack.simulate.scenarios import load_scenario
+from seatrack.simulate.scenarios import resolve_scenario
 
 
 def _radar(pd=0.9, clutter=20.0, components=("azimuth", "range")):
@@ -72,7 +76,8 @@ def test_births_deaths_and_crossings():
 def test_range_rate_and_scripted_targets():
     class Still:
         def trajectory(self, times):
-            from seatrack.simulate import Leg, trajectory
+            from seatrack.simulate import Leg
+            from seatrack.simulate import trajectory
 
             return trajectory([5000.0, 0.0], 0.0, 5.0, [Leg.straight(1.0)], times=times)
 

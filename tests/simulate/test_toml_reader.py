@@ -7,7 +7,10 @@ import math
 import pytest
 
 from seatrack.io.table import InputError
-from seatrack.simulate.toml_reader import SUFFIX_LIMITS, TomlReader, describe, suffix_limit
+from seatrack.simulate.toml_reader import SUFFIX_LIMITS
+from seatrack.simulate.toml_reader import TomlReader
+from seatrack.simulate.toml_reader import describe
+from seatrack.simulate.toml_reader import suffix_limit
 
 R = TomlReader("s.toml")
 

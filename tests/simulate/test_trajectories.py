@@ -2,7 +2,9 @@ import numpy as np
 import pytest
 
 from seatrack.geometry import G0
-from seatrack.simulate import Leg, leg_times, trajectory
+from seatrack.simulate import Leg
+from seatrack.simulate import leg_times
+from seatrack.simulate import trajectory
 
 
 def test_straight_then_quarter_turn_geometry():
@@ -70,7 +72,8 @@ def test_invalid_legs_and_sampling():
 
 
 def test_closed_form_displacements_match_fine_simpson():
-    from seatrack.simulate.trajectories import _displacement, _displacements
+    from seatrack.simulate.trajectories import _displacement
+    from seatrack.simulate.trajectories import _displacements
 
     rng = np.random.default_rng(0)
     n = 500

@@ -6,9 +6,13 @@ import numpy as np
 import pytest
 
 from seatrack.geometry import knots_to_mps
-from seatrack.simulate import Leg, trajectory
-from seatrack.simulate.tma import classic_scenario, scenario_from_trajectories
-from seatrack.tma import crb, detect_legs, solve
+from seatrack.simulate import Leg
+from seatrack.simulate import trajectory
+from seatrack.simulate.tma import classic_scenario
+from seatrack.simulate.tma import scenario_from_trajectories
+from seatrack.tma import crb
+from seatrack.tma import detect_legs
+from seatrack.tma import solve
 
 R = math.radians
 DT = 30.0

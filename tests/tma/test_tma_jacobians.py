@@ -7,9 +7,13 @@ import pytest
 from seatrack.geometry import bearing
 from seatrack.models import numerical_jacobian
 from seatrack.tma.bounds import operator_values
-from seatrack.tma.legs import leg_starts, leg_time_matrix, position_map
+from seatrack.tma.legs import leg_starts
+from seatrack.tma.legs import leg_time_matrix
+from seatrack.tma.legs import position_map
 from seatrack.tma.problem import bearing_residuals
-from seatrack.tma.support import SupportValue, support_residuals, support_rows
+from seatrack.tma.support import SupportValue
+from seatrack.tma.support import support_residuals
+from seatrack.tma.support import support_rows
 
 rng = np.random.default_rng(11)
 T = np.linspace(0.0, 1800.0, 25)

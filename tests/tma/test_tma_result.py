@@ -6,19 +6,20 @@ import math
 import numpy as np
 import pytest
 
-from seatrack.geometry import bearing, knots_to_mps
+from seatrack.geometry import bearing
+from seatrack.geometry import knots_to_mps
 from seatrack.information import SingularMatrixError
-from seatrack.simulate import Leg, trajectory
-from seatrack.simulate.tma import TMAScenario, classic_scenario
-from seatrack.tma import (
-    Bearings,
-    SupportValue,
-    TMAConfig,
-    crb,
-    operator_values,
-    solve,
-    solve_many,
-)
+from seatrack.simulate import Leg
+from seatrack.simulate import trajectory
+from seatrack.simulate.tma import TMAScenario
+from seatrack.simulate.tma import classic_scenario
+from seatrack.tma import Bearings
+from seatrack.tma import SupportValue
+from seatrack.tma import TMAConfig
+from seatrack.tma import crb
+from seatrack.tma import operator_values
+from seatrack.tma import solve
+from seatrack.tma import solve_many
 from tma_samples import random_geometry
 
 N_GEOMETRIES = 100

@@ -6,19 +6,21 @@ import math
 import numpy as np
 import pytest
 
-from seatrack.evaluate.metrics import anees, chi2_interval
-from seatrack.geometry import bearing, knots_to_mps
-from seatrack.simulate import Leg, trajectory
-from seatrack.simulate.tma import TMAScenario, classic_scenario
-from seatrack.tma import (
-    Bearings,
-    SupportValue,
-    TMAConfig,
-    crb,
-    position_crb,
-    solve,
-    solve_many,
-)
+from seatrack.evaluate.metrics import anees
+from seatrack.evaluate.metrics import chi2_interval
+from seatrack.geometry import bearing
+from seatrack.geometry import knots_to_mps
+from seatrack.simulate import Leg
+from seatrack.simulate import trajectory
+from seatrack.simulate.tma import TMAScenario
+from seatrack.simulate.tma import classic_scenario
+from seatrack.tma import Bearings
+from seatrack.tma import SupportValue
+from seatrack.tma import TMAConfig
+from seatrack.tma import crb
+from seatrack.tma import position_crb
+from seatrack.tma import solve
+from seatrack.tma import solve_many
 from seatrack.tma.legs import leg_starts
 from seatrack.tma.lm import levenberg_marquardt
 from seatrack.tma.problem import Problem

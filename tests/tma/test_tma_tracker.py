@@ -4,7 +4,9 @@ import numpy as np
 import pytest
 
 from seatrack.simulate.tma import classic_scenario
-from seatrack.tma import SupportValue, TMATracker, solve
+from seatrack.tma import SupportValue
+from seatrack.tma import TMATracker
+from seatrack.tma import solve
 
 SC = classic_scenario()
 

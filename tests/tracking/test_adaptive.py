@@ -3,16 +3,18 @@
 import numpy as np
 import pytest
 
-from seatrack.filters.base import (
-    Plots,
-    PlotStatus,
-    RecursiveFilter,
-    SensorNoise,
-    TrackState,
-    plot_gaussian,
-)
-from seatrack.filters.ekf import EKF, EKFConfig
-from seatrack.simulate import Leg, NoiseModel, observe, trajectory
+from seatrack.filters.base import Plots
+from seatrack.filters.base import PlotStatus
+from seatrack.filters.base import RecursiveFilter
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import TrackState
+from seatrack.filters.base import plot_gaussian
+from seatrack.filters.ekf import EKF
+from seatrack.filters.ekf import EKFConfig
+from seatrack.simulate import Leg
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 from seatrack.tracking.adaptive import NoiseLevels
 
 SN = SensorNoise(sigma_range=10.0, sigma_azimuth=np.radians(0.2))

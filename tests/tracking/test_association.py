@@ -4,11 +4,16 @@ import itertools
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
+from hypothesis import settings
 from hypothesis import strategies as st
 from scipy.special import logsumexp
 
-from seatrack.tracking.association import components, contested, gnn, group_logsumexp, jpda
+from seatrack.tracking.association import components
+from seatrack.tracking.association import contested
+from seatrack.tracking.association import gnn
+from seatrack.tracking.association import group_logsumexp
+from seatrack.tracking.association import jpda
 
 
 def _problem(seed, n_tracks, n_plots, density):

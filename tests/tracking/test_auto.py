@@ -9,13 +9,11 @@ from seatrack.filters.ekf import EKF
 from seatrack.filters.imm import CVCTIMM
 from seatrack.filters.registry import METHODS
 from seatrack.tracking.adaptive import NoiseLevels
-from seatrack.tracking.auto import (
-    AUTO_NOISE,
-    noise_levels,
-    per_track_filter,
-    scan_period,
-    user_gave_noise,
-)
+from seatrack.tracking.auto import AUTO_NOISE
+from seatrack.tracking.auto import noise_levels
+from seatrack.tracking.auto import per_track_filter
+from seatrack.tracking.auto import scan_period
+from seatrack.tracking.auto import user_gave_noise
 
 
 def test_scan_period_is_the_median_interval():

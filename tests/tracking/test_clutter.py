@@ -4,7 +4,9 @@ import numpy as np
 import pytest
 
 from seatrack.filters.base import Plots
-from seatrack.tracking.clutter import ClutterRate, DetectionRate, SurveillanceRegion
+from seatrack.tracking.clutter import ClutterRate
+from seatrack.tracking.clutter import DetectionRate
+from seatrack.tracking.clutter import SurveillanceRegion
 
 
 def _plots(rng, n, az_lo=0.0, az_hi=2 * np.pi):

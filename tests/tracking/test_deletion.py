@@ -2,7 +2,8 @@
 
 import numpy as np
 
-from seatrack.tracking.deletion import position_std, to_delete
+from seatrack.tracking.deletion import position_std
+from seatrack.tracking.deletion import to_delete
 
 
 def test_position_std_is_the_major_axis():

@@ -4,18 +4,17 @@ import itertools
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import given
+from hypothesis import settings
 from hypothesis import strategies as st
 
 from seatrack.tracking.association import jpda
-from seatrack.tracking.existence import (
-    UndetectedTargets,
-    ipda_update,
-    jipda_update,
-    logit,
-    probability,
-    survive,
-)
+from seatrack.tracking.existence import UndetectedTargets
+from seatrack.tracking.existence import ipda_update
+from seatrack.tracking.existence import jipda_update
+from seatrack.tracking.existence import logit
+from seatrack.tracking.existence import probability
+from seatrack.tracking.existence import survive
 
 
 def test_logit_and_probability_are_inverse_and_stable():

@@ -2,11 +2,19 @@
 
 import numpy as np
 import pytest
-from scipy.stats import chi2, multivariate_normal
+from scipy.stats import chi2
+from scipy.stats import multivariate_normal
 
-from seatrack.filters.base import Plots, SensorNoise, TrackState, plot_gaussian
-from seatrack.filters.ekf import EKF, EKFConfig
-from seatrack.tracking.gating import gate, gate_threshold, nis_logpdf, pregate
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import TrackState
+from seatrack.filters.base import plot_gaussian
+from seatrack.filters.ekf import EKF
+from seatrack.filters.ekf import EKFConfig
+from seatrack.tracking.gating import gate
+from seatrack.tracking.gating import gate_threshold
+from seatrack.tracking.gating import nis_logpdf
+from seatrack.tracking.gating import pregate
 
 SN = SensorNoise(sigma_range=15.0, sigma_azimuth=np.radians(0.5))
 
@@ -112,7 +120,9 @@ def test_pregate_brute_force_equals_the_kd_tree():
 
 def test_innovation_space_is_measured():
     from seatrack.filters import registry
-    from seatrack.tracking.gating import CARTESIAN, POLAR, innovation_space
+    from seatrack.tracking.gating import CARTESIAN
+    from seatrack.tracking.gating import POLAR
+    from seatrack.tracking.gating import innovation_space
 
     spaces = {m: innovation_space(registry.build(m).filter, SN)
               for m in ("ekf", "imm", "mm", "mm-spec", "turning", "ekf-rb")}  # fmt: skip
@@ -134,7 +144,8 @@ def test_innovation_space_is_measured():
 def test_cartesian_likelihoods_are_carried_to_the_polar_space():
     """The same plot under a polar and a Cartesian filter: densities differ by |J| = r."""
     from seatrack.filters import registry
-    from seatrack.tracking.gating import CARTESIAN, log_jacobian
+    from seatrack.tracking.gating import CARTESIAN
+    from seatrack.tracking.gating import log_jacobian
 
     p = Plots(np.zeros(1), np.array([8000.0]), np.array([0.3]))
     x, P = plot_gaussian(p, SN, 5.0)

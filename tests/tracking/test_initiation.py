@@ -3,8 +3,13 @@
 import numpy as np
 import pytest
 
-from seatrack.filters.base import Plots, SensorNoise, plot_gaussian
-from seatrack.tracking.initiation import confirmed, hopeless, polar_covariance, speed_gate_pairs
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import plot_gaussian
+from seatrack.tracking.initiation import confirmed
+from seatrack.tracking.initiation import hopeless
+from seatrack.tracking.initiation import polar_covariance
+from seatrack.tracking.initiation import speed_gate_pairs
 
 
 def _cov(n, s=20.0):

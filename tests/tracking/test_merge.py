@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from seatrack.filters.base import TrackState
-from seatrack.tracking.merge import merge_hypotheses, moment_match
+from seatrack.tracking.merge import merge_hypotheses
+from seatrack.tracking.merge import moment_match
 
 
 def _hyps():

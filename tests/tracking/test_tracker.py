@@ -5,26 +5,32 @@ import dataclasses
 import numpy as np
 import pytest
 
-from seatrack.config import ConfigError, parse_config
+from seatrack.config import ConfigError
+from seatrack.config import parse_config
 from seatrack.evaluate.multitarget import score_run
-from seatrack.filters.base import (
-    Plots,
-    PlotStatus,
-    RecursiveFilter,
-    SensorNoise,
-    TrackState,
-    common_columns,
-    finish_update,
-    plot_gaussian,
-)
-from seatrack.filters.ekf import EKF, EKFConfig
-from seatrack.filters.registry import METHODS, method_class
+from seatrack.filters.base import Plots
+from seatrack.filters.base import PlotStatus
+from seatrack.filters.base import RecursiveFilter
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import TrackState
+from seatrack.filters.base import common_columns
+from seatrack.filters.base import finish_update
+from seatrack.filters.base import plot_gaussian
+from seatrack.filters.ekf import EKF
+from seatrack.filters.ekf import EKFConfig
+from seatrack.filters.registry import METHODS
+from seatrack.filters.registry import method_class
 from seatrack.io.multitarget import sensor_noise
-from seatrack.models.motion import cv_noise, cv_transition
-from seatrack.simulate.multitarget import TargetPopulation, simulate_multitarget
+from seatrack.models.motion import cv_noise
+from seatrack.models.motion import cv_transition
+from seatrack.simulate.multitarget import TargetPopulation
+from seatrack.simulate.multitarget import simulate_multitarget
 from seatrack.simulate.scenarios import SensorConfig
-from seatrack.tracking import MultiTargetTracker, TrackerConfig, TrackStatus
-from seatrack.tracking.auto import per_track_filter, scan_period
+from seatrack.tracking import MultiTargetTracker
+from seatrack.tracking import TrackerConfig
+from seatrack.tracking import TrackStatus
+from seatrack.tracking.auto import per_track_filter
+from seatrack.tracking.auto import scan_period
 
 SN = SensorNoise(sigma_range=15.0, sigma_azimuth=np.radians(0.3))
 

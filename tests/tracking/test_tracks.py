@@ -3,7 +3,9 @@
 import numpy as np
 
 from seatrack.filters.base import Plots
-from seatrack.tracking.tracks import PendingPlots, TrackTable, concat_plots
+from seatrack.tracking.tracks import PendingPlots
+from seatrack.tracking.tracks import TrackTable
+from seatrack.tracking.tracks import concat_plots
 
 
 def _table(ids):

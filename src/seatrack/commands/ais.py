@@ -142,7 +142,8 @@ def track_files(paths: Sequence[str | Path], config: Any = None) -> tuple[Any, A
     """Read and track AIS files in memory (a vessel seen in several files is one track);
     returns ``(AisReports, AisTracks)`` row-aligned. For files of any size use
     :func:`seatrack.io.ais.track_files` (bounded memory, writes TRACKS)."""
-    from seatrack.filters.ais import AisTrackerConfig, track_reports
+    from seatrack.filters.ais import AisTrackerConfig
+    from seatrack.filters.ais import track_reports
     from seatrack.io.ais import read_ais
 
     reports = read_ais(list(paths))

@@ -20,7 +20,8 @@ from pathlib import Path
 
 import typer
 
-from seatrack.commands.options import option_in, prepare_outputs
+from seatrack.commands.options import option_in
+from seatrack.commands.options import prepare_outputs
 
 #: Monte-Carlo runs of each tracking situation by default
 DEFAULT_RUNS = 10
@@ -34,7 +35,8 @@ def _outputs(out: Path) -> list[Path]:
     """Every file the demo writes (checked before any work)."""
     from seatrack.commands.simulate import simulation_files
     from seatrack.report.demo import SECTIONS
-    from seatrack.simulate.scenarios import bundled_scenario, load_scenario
+    from seatrack.simulate.scenarios import bundled_scenario
+    from seatrack.simulate.scenarios import load_scenario
 
     data = simulation_files(load_scenario(bundled_scenario("demo")), out / "data")
     pngs = [out / f"{k}.png" for k in SECTIONS]
@@ -52,7 +54,8 @@ def _write_data(out: Path) -> None:
     import numpy as np
 
     from seatrack.commands.simulate import write_simulation
-    from seatrack.simulate.scenarios import bundled_scenario, load_scenario
+    from seatrack.simulate.scenarios import bundled_scenario
+    from seatrack.simulate.scenarios import load_scenario
 
     sc = load_scenario(bundled_scenario("demo"))
     write_simulation(sc.simulate(np.random.default_rng(sc.seed)), out / "data")
@@ -63,7 +66,8 @@ def run_demo(out: Path, runs: int | None, processes: int) -> str:
     from seatrack.commands.evaluate import MAX_PROCESSES
     from seatrack.io.atomic import atomic_write
     from seatrack.report.demo import run_sections
-    from seatrack.report.demo_page import demo_text, write_demo_page
+    from seatrack.report.demo_page import demo_text
+    from seatrack.report.demo_page import write_demo_page
 
     n = DEFAULT_RUNS if runs is None else runs
     option_in("--runs", n, 1, MAX_DEMO_RUNS)

@@ -9,7 +9,8 @@ from typing import Any
 import numpy as np
 import typer
 
-from seatrack.commands.options import option_in, prepare_outputs
+from seatrack.commands.options import option_in
+from seatrack.commands.options import prepare_outputs
 from seatrack.io.table import InputError
 
 #: most worker processes
@@ -89,13 +90,13 @@ def register(app: typer.Typer) -> None:
         the 95% chi-square bounds, and the time per plot. Results do not depend on
         --processes.
         """
-        from seatrack.evaluate.tracking import (
-            compare_methods,
-            position_crb,
-            summarize,
-            tracking_sensor,
-        )
-        from seatrack.simulate.scenarios import MAX_RUNS, load_scenario, resolve_scenario
+        from seatrack.evaluate.tracking import compare_methods
+        from seatrack.evaluate.tracking import position_crb
+        from seatrack.evaluate.tracking import summarize
+        from seatrack.evaluate.tracking import tracking_sensor
+        from seatrack.simulate.scenarios import MAX_RUNS
+        from seatrack.simulate.scenarios import load_scenario
+        from seatrack.simulate.scenarios import resolve_scenario
 
         sc = load_scenario(resolve_scenario(scenario))
         if sc.multitarget is not None:  # unlabelled plots: the multi-target tracker
@@ -141,7 +142,8 @@ def trial_errors(sc: Any, sens: Any, names: list[str], seed: int) -> dict[str, s
     it compiles the numba kernels and reports why a method cannot run on this scenario
     (a method the scenario configured in ``[evaluate.<method>]`` failing is a scenario error).
     """
-    from seatrack.evaluate.tracking import method_config, run_methods
+    from seatrack.evaluate.tracking import method_config
+    from seatrack.evaluate.tracking import run_methods
 
     trial = sc.simulate(np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0]))
     configs = {m: method_config(sc, sens, m) for m in names}
@@ -166,7 +168,8 @@ def print_summary(
     from rich.console import Console
 
     from seatrack.evaluate.metrics import chi2_interval
-    from seatrack.evaluate.montecarlo import format_table, rich_table
+    from seatrack.evaluate.montecarlo import format_table
+    from seatrack.evaluate.montecarlo import rich_table
     from seatrack.evaluate.tracking import SUMMARY_COLUMNS
 
     lo, hi = chi2_interval(1, n)
@@ -212,7 +215,8 @@ def write_error_plots(
     """Position RMSE (with the RMS CRB when it applies) and ANEES against time, as PNGs."""
     from seatrack.evaluate.metrics import chi2_interval
     from seatrack.evaluate.tracking import time_histories
-    from seatrack.report.plots import error_figure, save
+    from seatrack.report.plots import error_figure
+    from seatrack.report.plots import save
 
     hist = time_histories(res, names, dims=dims)
     bounds = None

@@ -23,8 +23,11 @@ from typing import Any
 
 import typer
 
-from seatrack.commands.options import option_in, option_positive, prepare_outputs
-from seatrack.io.table import MAX_DISTANCE_M, InputError
+from seatrack.commands.options import option_in
+from seatrack.commands.options import option_positive
+from seatrack.commands.options import prepare_outputs
+from seatrack.io.table import MAX_DISTANCE_M
+from seatrack.io.table import InputError
 
 #: largest own-ship speed accepted in --start, m/s (about 200 kn)
 MAX_START_SPEED_MPS = 100.0
@@ -151,7 +154,9 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Own-ship position and heading from radar echoes of mapped landmarks (JP H03-66630)."""
         from seatrack.io.landmarks import read_map_csv
-        from seatrack.io.navigation import read_echoes, read_gyro, write_nav
+        from seatrack.io.navigation import read_echoes
+        from seatrack.io.navigation import read_gyro
+        from seatrack.io.navigation import write_nav
         from seatrack.navigation.navigator import navigate
 
         x0 = parse_start(start)
@@ -191,10 +196,13 @@ def register(app: typer.Typer) -> None:
         cfg: Any = None,
     ) -> None:
         """Correct a landmark map from recorded passages; flag poorly visible landmarks."""
-        from seatrack.io.landmarks import read_map_csv, write_map_csv
-        from seatrack.io.navigation import read_echoes, read_gyro
+        from seatrack.io.landmarks import read_map_csv
+        from seatrack.io.landmarks import write_map_csv
+        from seatrack.io.navigation import read_echoes
+        from seatrack.io.navigation import read_gyro
         from seatrack.navigation.navigator import navigate
-        from seatrack.navigation.survey import SurveyConfig, survey
+        from seatrack.navigation.survey import SurveyConfig
+        from seatrack.navigation.survey import survey
 
         option_in("--min-visibility", min_visibility, 0.0, 1.0)
         x0s = [parse_start(s) for s in start]

@@ -12,8 +12,10 @@ import math
 from collections.abc import Iterable
 from pathlib import Path
 
-from seatrack.io.atomic import check_output_dir, check_output_path
-from seatrack.io.table import InputError, between
+from seatrack.io.atomic import check_output_dir
+from seatrack.io.atomic import check_output_path
+from seatrack.io.table import InputError
+from seatrack.io.table import between
 
 __all__ = ["option_in", "option_positive", "prepare_outputs"]
 

@@ -8,7 +8,8 @@ from typing import Any
 import numpy as np
 import typer
 
-from seatrack.commands.options import option_in, prepare_outputs
+from seatrack.commands.options import option_in
+from seatrack.commands.options import prepare_outputs
 
 
 def simulation_files(scenario: Any, out: Path) -> list[Path]:
@@ -38,7 +39,10 @@ def write_simulation(sim: Any, out: Path) -> list[tuple[Path, int]]:
     Returns (path, rows) for each file.
     """
     from seatrack.io.atomic import atomic_files
-    from seatrack.simulate.files import write_bearings, write_clutter, write_plots, write_truth
+    from seatrack.simulate.files import write_bearings
+    from seatrack.simulate.files import write_clutter
+    from seatrack.simulate.files import write_plots
+    from seatrack.simulate.files import write_truth
 
     paths = simulation_files(sim.scenario, out)
     prepare_outputs(paths, [out])
@@ -83,7 +87,8 @@ def write_multitarget(scenario: Any, rng: np.random.Generator, out: Path) -> lis
     from seatrack.evaluate.multitarget import simulate_scenario
     from seatrack.evaluate.tracking import tracking_sensor
     from seatrack.io.atomic import atomic_files
-    from seatrack.io.multitarget import write_plot_labels, write_unlabelled_plots
+    from seatrack.io.multitarget import write_plot_labels
+    from seatrack.io.multitarget import write_unlabelled_plots
     from seatrack.simulate.files import write_target_states
 
     paths = multitarget_files(scenario, out)
@@ -137,7 +142,8 @@ def register(app: typer.Typer) -> None:
         column (targets and clutter mixed, the multi-target tracker's input),
         plot_origin_<sensor>.csv (the target of each plot, or clutter) and truth.csv.
         """
-        from seatrack.simulate.scenarios import load_scenario, resolve_scenario
+        from seatrack.simulate.scenarios import load_scenario
+        from seatrack.simulate.scenarios import resolve_scenario
 
         sc = load_scenario(resolve_scenario(scenario))
         rng = seeded_rng(sc.seed if seed is None else seed, run)

@@ -94,9 +94,14 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Bearings-only TMA (DE 3446658): position, course and speed of every contact with
         1-sigma / 95 % values, support values, multi-leg targets and an observability check."""
-        from seatrack.io.atomic import atomic_write, check_output_path
-        from seatrack.io.tma import read_bearings, read_support, result_json, solution_summary
-        from seatrack.tma import TMAConfig, solve_many
+        from seatrack.io.atomic import atomic_write
+        from seatrack.io.atomic import check_output_path
+        from seatrack.io.tma import read_bearings
+        from seatrack.io.tma import read_support
+        from seatrack.io.tma import result_json
+        from seatrack.io.tma import solution_summary
+        from seatrack.tma import TMAConfig
+        from seatrack.tma import solve_many
 
         if not (math.isfinite(sigma_deg) and 0 < sigma_deg < 180):
             raise InputError(

@@ -108,8 +108,10 @@ def register(app: typer.Typer) -> None:
         the multi-target tracker, see docs/tracking.md)."""
         from seatrack.commands.options import prepare_outputs
         from seatrack.config import load_toml
-        from seatrack.filters.registry import method_class, run
-        from seatrack.io.multitarget import has_track_column, track_unlabelled
+        from seatrack.filters.registry import method_class
+        from seatrack.filters.registry import run
+        from seatrack.io.multitarget import has_track_column
+        from seatrack.io.multitarget import track_unlabelled
         from seatrack.io.plots import read_plots
 
         method_class(method)  # unknown method: fail before any work

@@ -22,20 +22,20 @@ matrix and the step, whatever the BLAS build would have done.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.information import (
-    SingularMatrixError,
-    as_float64,
-    check_information,
-    fisher_information,
-    invert_information,
-    invert_jacobian_information,
-)
+from seatrack.information import SingularMatrixError
+from seatrack.information import as_float64
+from seatrack.information import check_information
+from seatrack.information import fisher_information
+from seatrack.information import invert_information
+from seatrack.information import invert_jacobian_information
 
 __all__ = [
     "SingularMatrixError",

@@ -20,10 +20,13 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 from scipy import stats
 
-from seatrack.information import SingularMatrixError, as_float64, positive_definite_mask
+from seatrack.information import SingularMatrixError
+from seatrack.information import as_float64
+from seatrack.information import positive_definite_mask
 
 __all__ = [
     "rmse",

@@ -39,7 +39,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 from scipy.optimize import linear_sum_assignment
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
@@ -355,8 +356,11 @@ def track_scenario_run(
     """The multi-target tracker (per-track filter ``method``, configuration ``table`` of
     sensor, tracker and method keys) on one simulated run, scored against its truth."""
     from seatrack.config import parse_config
-    from seatrack.io.multitarget import make_filter, sensor_noise, split_config
-    from seatrack.tracking import MultiTargetTracker, TrackerConfig
+    from seatrack.io.multitarget import make_filter
+    from seatrack.io.multitarget import sensor_noise
+    from seatrack.io.multitarget import split_config
+    from seatrack.tracking import MultiTargetTracker
+    from seatrack.tracking import TrackerConfig
 
     t_tab, m_tab = split_config(table, "scenario")
     sensor = sensor_noise(m_tab, "scenario")
@@ -428,7 +432,8 @@ def evaluate_multitarget(
     from pathlib import Path
 
     from seatrack.evaluate.montecarlo import format_table
-    from seatrack.evaluate.tracking import method_config, tracking_sensor
+    from seatrack.evaluate.tracking import method_config
+    from seatrack.evaluate.tracking import tracking_sensor
     from seatrack.io.atomic import atomic_write
     from seatrack.io.multitarget import save_picture
 

@@ -21,17 +21,23 @@ import functools
 import math
 import time
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.evaluate.metrics import chi2_interval, rms_over_time
-from seatrack.evaluate.montecarlo import Column, MonteCarloResult, monte_carlo
+from seatrack.evaluate.metrics import chi2_interval
+from seatrack.evaluate.metrics import rms_over_time
+from seatrack.evaluate.montecarlo import Column
+from seatrack.evaluate.montecarlo import MonteCarloResult
+from seatrack.evaluate.montecarlo import monte_carlo
 from seatrack.simulate.files import plots_from_measurements
-from seatrack.simulate.scenarios import Scenario, SensorConfig, SensorData
+from seatrack.simulate.scenarios import Scenario
+from seatrack.simulate.scenarios import SensorConfig
+from seatrack.simulate.scenarios import SensorData
 
 FloatArray = NDArray[np.float64]
 
@@ -248,7 +254,10 @@ def position_crb(scenario: Scenario, sensor: str | None = None) -> FloatArray | 
         (``epsilon > 0``), or a 2-D sensor sees height differences.
     """
     from seatrack.evaluate.bounds import crb_deterministic
-    from seatrack.models.measurement import RangeBearing, RangeBearingElevation, RangeRate, Stacked
+    from seatrack.models.measurement import RangeBearing
+    from seatrack.models.measurement import RangeBearingElevation
+    from seatrack.models.measurement import RangeRate
+    from seatrack.models.measurement import Stacked
     from seatrack.models.motion import cv_transition
 
     s = tracking_sensor(scenario, sensor)

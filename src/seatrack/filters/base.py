@@ -31,19 +31,32 @@ as one batch.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from collections.abc import Iterator
+from collections.abc import Mapping
+from collections.abc import Sequence
+from dataclasses import dataclass
+from dataclasses import field
 from enum import IntEnum
-from typing import Any, ClassVar, Protocol, runtime_checkable
+from typing import Any
+from typing import ClassVar
+from typing import Protocol
+from typing import runtime_checkable
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 from seatrack import kalman
 from seatrack.config import param
-from seatrack.filters.converted import convert_plots, polar_jacobian
-from seatrack.geometry import spherical_to_cart, wrap_pi
-from seatrack.models.measurement import RangeBearing, RangeBearingElevation, RangeRate, Stacked
+from seatrack.filters.converted import convert_plots
+from seatrack.filters.converted import polar_jacobian
+from seatrack.geometry import spherical_to_cart
+from seatrack.geometry import wrap_pi
+from seatrack.models.measurement import RangeBearing
+from seatrack.models.measurement import RangeBearingElevation
+from seatrack.models.measurement import RangeRate
+from seatrack.models.measurement import Stacked
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

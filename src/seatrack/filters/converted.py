@@ -37,9 +37,11 @@ from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.geometry import polar_to_cart, spherical_to_cart
+from seatrack.geometry import polar_to_cart
+from seatrack.geometry import spherical_to_cart
 
 FloatArray = NDArray[np.float64]
 

@@ -30,14 +30,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.filters.base import (
-    FloatArray,
-    IntArray,
-    Plots,
-    PlotStatus,
-    RecursiveFilter,
-    TrackState,
-)
+from seatrack.filters.base import FloatArray
+from seatrack.filters.base import IntArray
+from seatrack.filters.base import Plots
+from seatrack.filters.base import PlotStatus
+from seatrack.filters.base import RecursiveFilter
+from seatrack.filters.base import TrackState
 
 __all__ = ["GROSS_NIS", "RESTART_AFTER", "run_tracks"]
 

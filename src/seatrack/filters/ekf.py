@@ -13,27 +13,29 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 from seatrack import kalman
 from seatrack.config import param
-from seatrack.filters.base import (
-    CartesianState,
-    ConfiguredFilter,
-    Plots,
-    TrackState,
-    common_columns,
-    finish_update,
-    measurement_model,
-    measurement_noise,
-    predicted,
-    speed_sigma_param,
-    step_times,
-    usable,
-    wrap_angles,
-)
+from seatrack.filters.base import CartesianState
+from seatrack.filters.base import ConfiguredFilter
+from seatrack.filters.base import Plots
+from seatrack.filters.base import TrackState
+from seatrack.filters.base import common_columns
+from seatrack.filters.base import finish_update
+from seatrack.filters.base import measurement_model
+from seatrack.filters.base import measurement_noise
+from seatrack.filters.base import predicted
+from seatrack.filters.base import speed_sigma_param
+from seatrack.filters.base import step_times
+from seatrack.filters.base import usable
+from seatrack.filters.base import wrap_angles
 from seatrack.models.measurement import polar_measurement
-from seatrack.models.motion import cv_matrices, cv_noise, cv_transition, scan_psd
+from seatrack.models.motion import cv_matrices
+from seatrack.models.motion import cv_noise
+from seatrack.models.motion import cv_transition
+from seatrack.models.motion import scan_psd
 from seatrack.models.targets import TargetClass
 
 FloatArray = NDArray[np.float64]

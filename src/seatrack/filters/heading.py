@@ -14,11 +14,14 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 from seatrack import kalman
-from seatrack.geometry import bearing, wrap_pi
-from seatrack.models.motion import cv_noise, cv_transition
+from seatrack.geometry import bearing
+from seatrack.geometry import wrap_pi
+from seatrack.models.motion import cv_noise
+from seatrack.models.motion import cv_transition
 
 FloatArray = NDArray[np.float64]
 

@@ -35,27 +35,30 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any
+from typing import ClassVar
 
 import numpy as np
-from numba import guvectorize, njit
-from numpy.typing import ArrayLike, NDArray
+from numba import guvectorize
+from numba import njit
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 from seatrack import kalman
 from seatrack.config import param
-from seatrack.filters.base import (
-    Plots,
-    SensorNoise,
-    TrackState,
-    common_columns,
-    conversion_param,
-    converted_positions,
-    finish_update,
-    predicted,
-    speed_sigma_param,
-    step_times,
-)
-from seatrack.models.measurement import Position, RangeRate, Stacked
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import TrackState
+from seatrack.filters.base import common_columns
+from seatrack.filters.base import conversion_param
+from seatrack.filters.base import converted_positions
+from seatrack.filters.base import finish_update
+from seatrack.filters.base import predicted
+from seatrack.filters.base import speed_sigma_param
+from seatrack.filters.base import step_times
+from seatrack.models.measurement import Position
+from seatrack.models.measurement import RangeRate
+from seatrack.models.measurement import Stacked
 from seatrack.models.motion import MotionModel
 from seatrack.models.targets import TargetClass
 
@@ -559,7 +562,8 @@ class CVCTIMM:
         d: int = 2,
         range_rate: bool = False,
     ) -> None:
-        from seatrack.models.motion import ConstantVelocity, CoordinatedTurn
+        from seatrack.models.motion import ConstantVelocity
+        from seatrack.models.motion import CoordinatedTurn
 
         self.config = c = config or CVCTIMMConfig()
         self.sensor = sensor or SensorNoise()

@@ -53,36 +53,35 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any
+from typing import ClassVar
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 from scipy.special import gammaln
 
 from seatrack import kalman
-from seatrack.config import param, redefault
-from seatrack.filters.base import (
-    CartesianState,
-    ConfiguredFilter,
-    Plots,
-    TrackState,
-    common_columns,
-    finish_update,
-    measurement_noise,
-    predicted,
-    speed_sigma_param,
-    step_times,
-    wrap_angles,
-)
+from seatrack.config import param
+from seatrack.config import redefault
+from seatrack.filters.base import CartesianState
+from seatrack.filters.base import ConfiguredFilter
+from seatrack.filters.base import Plots
+from seatrack.filters.base import TrackState
+from seatrack.filters.base import common_columns
+from seatrack.filters.base import finish_update
+from seatrack.filters.base import measurement_noise
+from seatrack.filters.base import predicted
+from seatrack.filters.base import speed_sigma_param
+from seatrack.filters.base import step_times
+from seatrack.filters.base import wrap_angles
 from seatrack.filters.ekf import sensor_state
-from seatrack.filters.levels_kernel import (
-    Rule,
-    dims,
-    level_combine_core,
-    level_predict_core,
-    level_update_core,
-    mixture_core,
-)
+from seatrack.filters.levels_kernel import Rule
+from seatrack.filters.levels_kernel import dims
+from seatrack.filters.levels_kernel import level_combine_core
+from seatrack.filters.levels_kernel import level_predict_core
+from seatrack.filters.levels_kernel import level_update_core
+from seatrack.filters.levels_kernel import mixture_core
 from seatrack.models.measurement import polar_measurement
 from seatrack.models.motion import cv_matrices
 from seatrack.models.targets import TargetClass

@@ -29,16 +29,15 @@ from enum import IntEnum
 import numpy as np
 from numba import njit
 
-from seatrack.filters.imm import combine_core, mix_core
-from seatrack.kalman import (
-    cholesky_core,
-    cholesky_m,
-    forward_core,
-    forward_m,
-    matmul_core,
-    predict_core,
-    wrap_angle,
-)
+from seatrack.filters.imm import combine_core
+from seatrack.filters.imm import mix_core
+from seatrack.kalman import cholesky_core
+from seatrack.kalman import cholesky_m
+from seatrack.kalman import forward_core
+from seatrack.kalman import forward_m
+from seatrack.kalman import matmul_core
+from seatrack.kalman import predict_core
+from seatrack.kalman import wrap_angle
 from seatrack.models.measurement import polar_core
 
 __all__ = [

@@ -56,25 +56,25 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import Any
+from typing import ClassVar
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 from seatrack.config import param
-from seatrack.filters.base import (
-    CartesianState,
-    Plots,
-    SensorNoise,
-    TrackState,
-    common_columns,
-    conversion_param,
-    converted_positions,
-    finish_update,
-    predicted,
-    speed_sigma_param,
-    step_times,
-)
+from seatrack.filters.base import CartesianState
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import TrackState
+from seatrack.filters.base import common_columns
+from seatrack.filters.base import conversion_param
+from seatrack.filters.base import converted_positions
+from seatrack.filters.base import finish_update
+from seatrack.filters.base import predicted
+from seatrack.filters.base import speed_sigma_param
+from seatrack.filters.base import step_times
 from seatrack.filters.multimodel_kernel import step_kernel
 from seatrack.geometry import G0
 from seatrack.information import as_float64
@@ -315,7 +315,8 @@ def range_rate_row(
     This mirrors the compiled step 3 (which the tests check against it and against a
     numerical Jacobian) and reuses :func:`seatrack.models.measurement.range_rate_jacobian`.
     """
-    from seatrack.models.measurement import range_rate, range_rate_jacobian
+    from seatrack.models.measurement import range_rate
+    from seatrack.models.measurement import range_rate_jacobian
 
     xx = np.asarray(x, dtype=float)
     d = xx.shape[-1] // 2

@@ -10,16 +10,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import guvectorize, njit
+from numba import guvectorize
+from numba import njit
 
 from seatrack.filters.imm import markov_predict_core
-from seatrack.kalman import (
-    cholesky_core,
-    forward_core,
-    matmul_core,
-    sym_matmul_core,
-    update_core,
-)
+from seatrack.kalman import cholesky_core
+from seatrack.kalman import forward_core
+from seatrack.kalman import matmul_core
+from seatrack.kalman import sym_matmul_core
+from seatrack.kalman import update_core
 
 __all__ = ["step_kernel", "mahalanobis"]
 

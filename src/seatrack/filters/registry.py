@@ -32,22 +32,25 @@ from __future__ import annotations
 
 import importlib
 import math
-from collections.abc import Callable, Mapping
+from collections.abc import Callable
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.config import ConfigError, config_keys, parse_config
-from seatrack.filters.base import (
-    COMMON_COLUMNS,
-    Plots,
-    RecursiveFilter,
-    SensorNoise,
-    plot_gaussian,
-)
-from seatrack.filters.driver import GROSS_NIS, run_tracks
+from seatrack.config import ConfigError
+from seatrack.config import config_keys
+from seatrack.config import parse_config
+from seatrack.filters.base import COMMON_COLUMNS
+from seatrack.filters.base import Plots
+from seatrack.filters.base import RecursiveFilter
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import plot_gaussian
+from seatrack.filters.driver import GROSS_NIS
+from seatrack.filters.driver import run_tracks
 
 if TYPE_CHECKING:
     from seatrack.models.targets import TargetClass

@@ -68,12 +68,19 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 from scipy.stats import chi2
 
-from seatrack.geometry import angle_diff, bearing, polar_to_cart, rotation_to_beam
-from seatrack.kalman import extended_predict, update
-from seatrack.models.motion import ca_transition, cv_noise_discrete, cv_transition
+from seatrack.geometry import angle_diff
+from seatrack.geometry import bearing
+from seatrack.geometry import polar_to_cart
+from seatrack.geometry import rotation_to_beam
+from seatrack.kalman import extended_predict
+from seatrack.kalman import update
+from seatrack.models.motion import ca_transition
+from seatrack.models.motion import cv_noise_discrete
+from seatrack.models.motion import cv_transition
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]

@@ -29,22 +29,24 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
-from typing import Any, ClassVar
+from typing import Any
+from typing import ClassVar
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.filters.robust import (
-    SonarModel,
-    TrackEstimates,
-    axis_noise,
-    axis_transition,
-    beam_to_cartesian_cov,
-    check_track_inputs,
-    initial_state,
-    per_axis_to_flat,
-)
-from seatrack.kalman import UpdateResult, extended_update, predict
+from seatrack.filters.robust import SonarModel
+from seatrack.filters.robust import TrackEstimates
+from seatrack.filters.robust import axis_noise
+from seatrack.filters.robust import axis_transition
+from seatrack.filters.robust import beam_to_cartesian_cov
+from seatrack.filters.robust import check_track_inputs
+from seatrack.filters.robust import initial_state
+from seatrack.filters.robust import per_axis_to_flat
+from seatrack.kalman import UpdateResult
+from seatrack.kalman import extended_update
+from seatrack.kalman import predict
 from seatrack.models.measurement import RangeBearing
 
 FloatArray = NDArray[np.float64]

@@ -20,44 +20,41 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import partial
-from typing import Any, ClassVar
+from typing import Any
+from typing import ClassVar
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 from seatrack import kalman
 from seatrack.config import param
-from seatrack.filters.base import (
-    ConfiguredFilter,
-    Plots,
-    SensorNoise,
-    TrackState,
-    common_columns,
-    finish_update,
-    predicted,
-    speed_sigma_param,
-    step_times,
-    usable,
-    wrap_angles,
-)
-from seatrack.filters.robust import (
-    RobustConfig,
-    SonarModel,
-    axis_noise,
-    axis_transition,
-    beam_innovations,
-    beam_to_cartesian_cov,
-    per_axis_to_flat,
-    robust_update,
-    rotate_blocks,
-)
-from seatrack.filters.robust_baselines import (
-    HuberConfig,
-    StudentTConfig,
-    plain_update,
-    reweighted_update,
-)
-from seatrack.geometry import angle_diff, rotation_to_beam
+from seatrack.filters.base import ConfiguredFilter
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import TrackState
+from seatrack.filters.base import common_columns
+from seatrack.filters.base import finish_update
+from seatrack.filters.base import predicted
+from seatrack.filters.base import speed_sigma_param
+from seatrack.filters.base import step_times
+from seatrack.filters.base import usable
+from seatrack.filters.base import wrap_angles
+from seatrack.filters.robust import RobustConfig
+from seatrack.filters.robust import SonarModel
+from seatrack.filters.robust import axis_noise
+from seatrack.filters.robust import axis_transition
+from seatrack.filters.robust import beam_innovations
+from seatrack.filters.robust import beam_to_cartesian_cov
+from seatrack.filters.robust import per_axis_to_flat
+from seatrack.filters.robust import robust_update
+from seatrack.filters.robust import rotate_blocks
+from seatrack.filters.robust_baselines import HuberConfig
+from seatrack.filters.robust_baselines import StudentTConfig
+from seatrack.filters.robust_baselines import plain_update
+from seatrack.filters.robust_baselines import reweighted_update
+from seatrack.geometry import angle_diff
+from seatrack.geometry import rotation_to_beam
 from seatrack.models.measurement import polar_measurement
 from seatrack.models.targets import TargetClass
 

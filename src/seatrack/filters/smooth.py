@@ -23,7 +23,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack import kalman
-from seatrack.filters.base import Plots, RecursiveFilter
+from seatrack.filters.base import Plots
+from seatrack.filters.base import RecursiveFilter
 
 FloatArray = NDArray[np.float64]
 

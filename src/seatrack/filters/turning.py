@@ -37,36 +37,40 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
+from dataclasses import fields
 from enum import IntEnum
 from functools import lru_cache
-from typing import Any, ClassVar
+from typing import Any
+from typing import ClassVar
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 from seatrack import kalman
 from seatrack.config import param
-from seatrack.filters.base import (
-    CartesianState,
-    Plots,
-    PlotStatus,
-    SensorNoise,
-    TrackState,
-    common_columns,
-    finish_update,
-    plot_gaussian,
-    predicted,
-    speed_sigma_param,
-    step_times,
-    usable,
-    wrap_angles,
-)
+from seatrack.filters.base import CartesianState
+from seatrack.filters.base import Plots
+from seatrack.filters.base import PlotStatus
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import TrackState
+from seatrack.filters.base import common_columns
+from seatrack.filters.base import finish_update
+from seatrack.filters.base import plot_gaussian
+from seatrack.filters.base import predicted
+from seatrack.filters.base import speed_sigma_param
+from seatrack.filters.base import step_times
+from seatrack.filters.base import usable
+from seatrack.filters.base import wrap_angles
 from seatrack.filters.turning_kernel import turn_logic
 from seatrack.geometry import bearing
-from seatrack.models import RangeBearing, RangeBearingElevation
+from seatrack.models import RangeBearing
+from seatrack.models import RangeBearingElevation
 from seatrack.models.measurement import polar_measurement
-from seatrack.models.motion import cv_matrices, cv_noise, cv_transition
+from seatrack.models.motion import cv_matrices
+from seatrack.models.motion import cv_noise
+from seatrack.models.motion import cv_transition
 from seatrack.models.targets import TargetClass
 
 FloatArray = NDArray[np.float64]

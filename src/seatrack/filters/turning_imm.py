@@ -20,15 +20,22 @@ Columns: the level IMM's (``p_manoeuvre``, ``q_m2ps3``) and the patent's S6 outp
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
-from typing import Any, ClassVar
+from dataclasses import dataclass
+from dataclasses import replace
+from typing import Any
+from typing import ClassVar
 
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 from seatrack.config import param
 from seatrack.filters.base import TrackState
-from seatrack.filters.levels import LevelConfig, LevelIMM, OutlierConfig
-from seatrack.filters.turning import Turning, TurningConfig, heading_columns
+from seatrack.filters.levels import LevelConfig
+from seatrack.filters.levels import LevelIMM
+from seatrack.filters.levels import OutlierConfig
+from seatrack.filters.turning import Turning
+from seatrack.filters.turning import TurningConfig
+from seatrack.filters.turning import heading_columns
 from seatrack.models.targets import TargetClass
 
 __all__ = ["TurningLevelsConfig", "TurningLevels"]

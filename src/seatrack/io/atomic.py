@@ -26,7 +26,8 @@ import os
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
-from typing import IO, Any
+from typing import IO
+from typing import Any
 
 __all__ = [
     "OutputError",

@@ -41,7 +41,11 @@ import numpy as np
 
 from seatrack.geometry import geodetic_to_enu
 from seatrack.io.atomic import atomic_write
-from seatrack.io.table import InputError, coordinate, latitude, longitude, read_csv_table
+from seatrack.io.table import InputError
+from seatrack.io.table import coordinate
+from seatrack.io.table import latitude
+from seatrack.io.table import longitude
+from seatrack.io.table import read_csv_table
 from seatrack.navigation.landmarks import LandmarkMap
 
 __all__ = ["read_map_csv", "write_map_csv", "encode_records", "decode_records"]

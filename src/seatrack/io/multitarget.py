@@ -29,13 +29,28 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.config import ConfigError, config_keys, load_toml, parse_config
+from seatrack.config import ConfigError
+from seatrack.config import config_keys
+from seatrack.config import load_toml
+from seatrack.config import parse_config
 from seatrack.filters import registry
-from seatrack.filters.base import COMMON_COLUMNS, Plots, SensorNoise
-from seatrack.io.atomic import atomic_path, atomic_write, check_output_path
-from seatrack.io.table import InputError, Table, check_times, decode_text, read_csv_table
-from seatrack.tracking import MultiTargetTracker, TrackerConfig, TrackerRun, TrackStatus
-from seatrack.tracking.auto import per_track_filter, scan_period
+from seatrack.filters.base import COMMON_COLUMNS
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.io.atomic import atomic_path
+from seatrack.io.atomic import atomic_write
+from seatrack.io.atomic import check_output_path
+from seatrack.io.table import InputError
+from seatrack.io.table import Table
+from seatrack.io.table import check_times
+from seatrack.io.table import decode_text
+from seatrack.io.table import read_csv_table
+from seatrack.tracking import MultiTargetTracker
+from seatrack.tracking import TrackerConfig
+from seatrack.tracking import TrackerRun
+from seatrack.tracking import TrackStatus
+from seatrack.tracking.auto import per_track_filter
+from seatrack.tracking.auto import scan_period
 
 FloatArray = NDArray[np.float64]
 
@@ -63,7 +78,8 @@ def has_track_column(path: str | Path) -> bool:
     if not p.is_file():
         raise InputError(f"{p}: file not found")
     with p.open("rb") as fh:
-        first = fh.readline()
+        head = fh.read(1 << 16).splitlines()  # LF, CRLF or the old CR alone
+    first = head[0] if head else b""
     text, _ = decode_text(first)  # UTF-8 (BOM dropped), else Latin-1, as every reader
     try:
         header = next(csv.reader([text]), [])

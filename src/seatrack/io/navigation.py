@@ -13,12 +13,18 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 from seatrack.geometry import bearing_rad_to_deg
 from seatrack.io.atomic import atomic_write
-from seatrack.io.table import between, check_times, positive, read_csv_table, seconds
-from seatrack.navigation.navigator import Echoes, NavResult
+from seatrack.io.table import between
+from seatrack.io.table import check_times
+from seatrack.io.table import positive
+from seatrack.io.table import read_csv_table
+from seatrack.io.table import seconds
+from seatrack.navigation.navigator import Echoes
+from seatrack.navigation.navigator import NavResult
 
 FloatArray = NDArray[np.float64]
 

@@ -27,7 +27,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.filters.base import Plots
-from seatrack.io.table import InputError, Table, check_times, read_csv_table
+from seatrack.io.table import InputError
+from seatrack.io.table import Table
+from seatrack.io.table import check_times
+from seatrack.io.table import read_csv_table
 
 FloatArray = NDArray[np.float64]
 

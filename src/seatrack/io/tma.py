@@ -32,12 +32,17 @@ from typing import Any
 
 import numpy as np
 
-from seatrack.geometry import bearing_rad_to_deg, deg2rad
-from seatrack.io.table import InputError, Table, check_times, read_csv_table
+from seatrack.geometry import bearing_rad_to_deg
+from seatrack.geometry import deg2rad
+from seatrack.io.table import InputError
+from seatrack.io.table import Table
+from seatrack.io.table import check_times
+from seatrack.io.table import read_csv_table
 from seatrack.tma.bounds import ellipse
 from seatrack.tma.problem import Bearings
 from seatrack.tma.result import TMASolution
-from seatrack.tma.support import KINDS, SupportValue
+from seatrack.tma.support import KINDS
+from seatrack.tma.support import SupportValue
 
 __all__ = [
     "DEFAULT_CONTACT",

@@ -23,11 +23,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Any, ClassVar, Protocol
+from typing import Any
+from typing import ClassVar
+from typing import Protocol
 
 import numpy as np
-from numba import guvectorize, njit
-from numpy.typing import ArrayLike, NDArray
+from numba import guvectorize
+from numba import njit
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 from seatrack.kalman import cov_core
 

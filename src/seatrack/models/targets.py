@@ -59,13 +59,15 @@ Units: SI and radians inside (m/s, m/s^2, rad/s, s).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from dataclasses import field
 from types import MappingProxyType
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.linalg import solve_discrete_are, solve_discrete_lyapunov
+from scipy.linalg import solve_discrete_are
+from scipy.linalg import solve_discrete_lyapunov
 from scipy.optimize import minimize_scalar
 
 from seatrack.geometry import G0

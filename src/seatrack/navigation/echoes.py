@@ -22,9 +22,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.geometry import polar_to_cart, rotation_to_beam, wrap_pi
+from seatrack.geometry import polar_to_cart
+from seatrack.geometry import rotation_to_beam
+from seatrack.geometry import wrap_pi
 
 FloatArray = NDArray[np.float64]
 

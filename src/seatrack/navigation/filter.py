@@ -32,15 +32,22 @@ linearised measurement (innovation, rows, noise), because the navigation measure
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any
+from typing import Protocol
 
 import numpy as np
 import scipy.linalg
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.filters.base import TrackState, finish_update, predicted
-from seatrack.geometry import bearing, wrap_pi
-from seatrack.kalman import extended_predict, extended_update, nis_log_likelihood
+from seatrack.filters.base import TrackState
+from seatrack.filters.base import finish_update
+from seatrack.filters.base import predicted
+from seatrack.geometry import bearing
+from seatrack.geometry import wrap_pi
+from seatrack.kalman import extended_predict
+from seatrack.kalman import extended_update
+from seatrack.kalman import nis_log_likelihood
 
 FloatArray = NDArray[np.float64]
 

@@ -19,37 +19,42 @@ angles do not follow a constant rotation at that period raises ``ValueError``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass
+from dataclasses import field
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.geometry import TWO_PI, bearing, wrap_pi
-from seatrack.navigation.echoes import (
-    GateConfig,
-    adaptive_half_angle,
-    echo_weights,
-    local_offsets,
-    weighted_measurement,
-)
-from seatrack.navigation.filter import (
-    KalmanNav,
-    NavFilter,
-    ProcessNoise,
-    SRIFNav,
-    antenna_position,
-    compass_row,
-    contour_row,
-    gnss_rows,
-    gyro_row,
-    landmark_geometry,
-    log_speed,
-    point_rows,
-)
+from seatrack.geometry import TWO_PI
+from seatrack.geometry import bearing
+from seatrack.geometry import wrap_pi
+from seatrack.navigation.echoes import GateConfig
+from seatrack.navigation.echoes import adaptive_half_angle
+from seatrack.navigation.echoes import echo_weights
+from seatrack.navigation.echoes import local_offsets
+from seatrack.navigation.echoes import weighted_measurement
+from seatrack.navigation.filter import KalmanNav
+from seatrack.navigation.filter import NavFilter
+from seatrack.navigation.filter import ProcessNoise
+from seatrack.navigation.filter import SRIFNav
+from seatrack.navigation.filter import antenna_position
+from seatrack.navigation.filter import compass_row
+from seatrack.navigation.filter import contour_row
+from seatrack.navigation.filter import gnss_rows
+from seatrack.navigation.filter import gyro_row
+from seatrack.navigation.filter import landmark_geometry
+from seatrack.navigation.filter import log_speed
+from seatrack.navigation.filter import point_rows
 from seatrack.navigation.landmarks import LandmarkMap
-from seatrack.navigation.schedule import ScheduleConfig, next_landmark
-from seatrack.navigation.window import Window, in_range, settle_window, step_window
+from seatrack.navigation.schedule import ScheduleConfig
+from seatrack.navigation.schedule import next_landmark
+from seatrack.navigation.window import Window
+from seatrack.navigation.window import in_range
+from seatrack.navigation.window import settle_window
+from seatrack.navigation.window import step_window
 
 FloatArray = NDArray[np.float64]
 

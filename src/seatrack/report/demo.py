@@ -17,9 +17,11 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
+from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from dataclasses import field
 from pathlib import Path
 from typing import Any
 
@@ -27,8 +29,11 @@ import numpy as np
 
 from seatrack.compiled import compile_all
 from seatrack.filters.registry import run
-from seatrack.report.plots import save, situation_figure
-from seatrack.simulate.families import HEADLINE_SEEDS, Scenario, labelled_runs
+from seatrack.report.plots import save
+from seatrack.report.plots import situation_figure
+from seatrack.simulate.families import HEADLINE_SEEDS
+from seatrack.simulate.families import Scenario
+from seatrack.simulate.families import labelled_runs
 
 __all__ = ["Row", "Section", "WHEN", "SECTIONS", "run_sections", "rmse_rows"]
 
@@ -232,10 +237,14 @@ def outliers_section(out: Path, runs: int) -> Section:
 
 def tma_section(out: Path, runs: int) -> Section:
     """Bearings-only TMA on the bundled ``tma_classic`` scenario."""
-    from seatrack.geometry import course_speed, mps_to_knots, rad2deg
+    from seatrack.geometry import course_speed
+    from seatrack.geometry import mps_to_knots
+    from seatrack.geometry import rad2deg
     from seatrack.report.tma import plot_solutions
-    from seatrack.simulate.scenarios import bundled_scenario, load_scenario
-    from seatrack.tma.solver import Bearings, solve
+    from seatrack.simulate.scenarios import bundled_scenario
+    from seatrack.simulate.scenarios import load_scenario
+    from seatrack.tma.solver import Bearings
+    from seatrack.tma.solver import solve
 
     t0 = time.perf_counter()
     sc = load_scenario(bundled_scenario("tma_classic"))
@@ -274,8 +283,12 @@ def tma_section(out: Path, runs: int) -> Section:
 
 def navigation_section(out: Path, runs: int) -> Section:
     """Own-ship navigation from radar echoes of charted landmarks on a river passage."""
-    from seatrack.navigation.navigator import Echoes, NavigatorConfig, navigate
-    from seatrack.simulate.radar_echoes import channel_landmarks, river_route, simulate_radar
+    from seatrack.navigation.navigator import Echoes
+    from seatrack.navigation.navigator import NavigatorConfig
+    from seatrack.navigation.navigator import navigate
+    from seatrack.simulate.radar_echoes import channel_landmarks
+    from seatrack.simulate.radar_echoes import river_route
+    from seatrack.simulate.radar_echoes import simulate_radar
 
     t0 = time.perf_counter()
     route = river_route(3000.0, 4.0)
@@ -347,8 +360,10 @@ def ais_section(out: Path, runs: int) -> Section:
 def multitarget_section(out: Path, runs: int) -> Section:
     """The multi-target tracker on unlabelled plots of the bundled coastal scenario."""
     from seatrack.evaluate.multitarget import simulate_scenario
-    from seatrack.io.multitarget import track_unlabelled, write_unlabelled_plots
-    from seatrack.simulate.scenarios import bundled_scenario, load_scenario
+    from seatrack.io.multitarget import track_unlabelled
+    from seatrack.io.multitarget import write_unlabelled_plots
+    from seatrack.simulate.scenarios import bundled_scenario
+    from seatrack.simulate.scenarios import load_scenario
 
     t0 = time.perf_counter()
     sc = load_scenario(bundled_scenario("coastal_multitarget"))

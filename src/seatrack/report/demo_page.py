@@ -20,7 +20,9 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from seatrack.io.atomic import atomic_write
-from seatrack.report.demo import WHEN, Row, Section
+from seatrack.report.demo import WHEN
+from seatrack.report.demo import Row
+from seatrack.report.demo import Section
 
 __all__ = ["demo_text", "demo_page", "write_demo_page"]
 

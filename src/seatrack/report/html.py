@@ -35,7 +35,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.io.atomic import atomic_write
-from seatrack.report.map_page import OPENSEAMAP_URL, MapOptions, page_data, render_page
+from seatrack.report.map_page import OPENSEAMAP_URL
+from seatrack.report.map_page import MapOptions
+from seatrack.report.map_page import page_data
+from seatrack.report.map_page import render_page
 
 FloatArray = NDArray[np.float64]
 

@@ -23,7 +23,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.report.decimate import budget_tolerance, dp_ranks, mercator
+from seatrack.report.decimate import budget_tolerance
+from seatrack.report.decimate import dp_ranks
+from seatrack.report.decimate import mercator
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

@@ -42,7 +42,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.report.decimate import budget_tolerance, dp_ranks, mercator_rows, pixel_size
+from seatrack.report.decimate import budget_tolerance
+from seatrack.report.decimate import dp_ranks
+from seatrack.report.decimate import mercator_rows
+from seatrack.report.decimate import pixel_size
 from seatrack.report.land import land_rings
 
 FloatArray = NDArray[np.float64]

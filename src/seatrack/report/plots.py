@@ -7,7 +7,8 @@ safe in worker processes and tests; :func:`save` writes one to a PNG file.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 

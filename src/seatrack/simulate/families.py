@@ -44,13 +44,21 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.interpolate import BSpline, make_smoothing_spline
+from scipy.interpolate import BSpline
+from scipy.interpolate import make_smoothing_spline
 
-from seatrack.filters.base import Plots, SensorNoise
-from seatrack.geometry import G0, course_speed, wrap_2pi
-from seatrack.models.targets import TargetClass, target_class
-from seatrack.simulate.sensors import NoiseModel, observe
-from seatrack.simulate.trajectories import Leg, Trajectory, trajectory
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.geometry import G0
+from seatrack.geometry import course_speed
+from seatrack.geometry import wrap_2pi
+from seatrack.models.targets import TargetClass
+from seatrack.models.targets import target_class
+from seatrack.simulate.sensors import NoiseModel
+from seatrack.simulate.sensors import observe
+from seatrack.simulate.trajectories import Leg
+from seatrack.simulate.trajectories import Trajectory
+from seatrack.simulate.trajectories import trajectory
 
 FloatArray = NDArray[np.float64]
 
@@ -263,7 +271,9 @@ class AisStretch:
 def _vessel_segments(source: str) -> list[tuple[int, FloatArray, FloatArray]]:
     """Per vessel: time-ordered reports without duplicate times, cut at gaps > 60 s."""
     from seatrack.data import ais_sample
-    from seatrack.io.ais import read_ais_csv, to_local, validate_reports
+    from seatrack.io.ais import read_ais_csv
+    from seatrack.io.ais import to_local
+    from seatrack.io.ais import validate_reports
 
     r = validate_reports(read_ais_csv(ais_sample(source)))
     loc = to_local(r)

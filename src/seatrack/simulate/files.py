@@ -15,23 +15,23 @@ same values bit for bit. :func:`plots_from_measurements` builds the in-memory
 from __future__ import annotations
 
 import csv
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.filters.base import STATE_COLUMNS, Plots
+from seatrack.filters.base import STATE_COLUMNS
+from seatrack.filters.base import Plots
 from seatrack.geometry import bearing_rad_to_deg
 from seatrack.io.atomic import atomic_write
-from seatrack.io.table import (
-    InputError,
-    angle_deg,
-    between,
-    coordinate,
-    read_csv_table,
-    seconds,
-)
+from seatrack.io.table import InputError
+from seatrack.io.table import angle_deg
+from seatrack.io.table import between
+from seatrack.io.table import coordinate
+from seatrack.io.table import read_csv_table
+from seatrack.io.table import seconds
 from seatrack.simulate.sensors import Measurements
 from seatrack.simulate.trajectories import Trajectory
 

@@ -23,8 +23,10 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.simulate.sensors import NoiseModel, observe
-from seatrack.simulate.trajectories import Leg, trajectory
+from seatrack.simulate.sensors import NoiseModel
+from seatrack.simulate.sensors import observe
+from seatrack.simulate.trajectories import Leg
+from seatrack.simulate.trajectories import trajectory
 
 FloatArray = NDArray[np.float64]
 

@@ -30,18 +30,28 @@ seeded generator: a run is reproducible from its seed.
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol
+from typing import Any
+from typing import Protocol
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.config import ConfigError, param, parse_config, to_edge
+from seatrack.config import ConfigError
+from seatrack.config import param
+from seatrack.config import parse_config
+from seatrack.config import to_edge
 from seatrack.filters.base import Plots
 from seatrack.io.table import InputError
-from seatrack.simulate.sensors import NoiseModel, observe, uniform_clutter
-from seatrack.simulate.trajectories import Leg, Trajectory, trajectory
+from seatrack.simulate.sensors import NoiseModel
+from seatrack.simulate.sensors import observe
+from seatrack.simulate.sensors import uniform_clutter
+from seatrack.simulate.trajectories import Leg
+from seatrack.simulate.trajectories import Trajectory
+from seatrack.simulate.trajectories import trajectory
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

@@ -25,15 +25,22 @@ Everything is vectorised over (revolution, landmark) pairs and pulses; no loop p
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from collections.abc import Sequence
+from dataclasses import dataclass
+from dataclasses import field
 
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.geometry import TWO_PI, bearing, wrap_2pi, wrap_pi
+from seatrack.geometry import TWO_PI
+from seatrack.geometry import bearing
+from seatrack.geometry import wrap_2pi
+from seatrack.geometry import wrap_pi
 from seatrack.navigation.landmarks import LandmarkMap
-from seatrack.simulate.trajectories import Leg, Trajectory, trajectory
+from seatrack.simulate.trajectories import Leg
+from seatrack.simulate.trajectories import Trajectory
+from seatrack.simulate.trajectories import trajectory
 
 FloatArray = NDArray[np.float64]
 

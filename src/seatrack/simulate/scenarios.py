@@ -61,8 +61,10 @@ from __future__ import annotations
 
 import math
 import tomllib
-from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Mapping
+from collections.abc import Sequence
+from dataclasses import dataclass
+from dataclasses import field
 from importlib import resources
 from pathlib import Path
 from typing import Any
@@ -70,12 +72,22 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.geometry import KNOT_MPS, geodetic_to_enu
-from seatrack.io.table import MAX_TIME_S, InputError
-from seatrack.simulate.multitarget import TargetPopulation, parse_multitarget
-from seatrack.simulate.sensors import Measurements, NoiseModel, observe, uniform_clutter
-from seatrack.simulate.toml_reader import TomlReader, describe, join_key
-from seatrack.simulate.trajectories import Leg, Trajectory, trajectory
+from seatrack.geometry import KNOT_MPS
+from seatrack.geometry import geodetic_to_enu
+from seatrack.io.table import MAX_TIME_S
+from seatrack.io.table import InputError
+from seatrack.simulate.multitarget import TargetPopulation
+from seatrack.simulate.multitarget import parse_multitarget
+from seatrack.simulate.sensors import Measurements
+from seatrack.simulate.sensors import NoiseModel
+from seatrack.simulate.sensors import observe
+from seatrack.simulate.sensors import uniform_clutter
+from seatrack.simulate.toml_reader import TomlReader
+from seatrack.simulate.toml_reader import describe
+from seatrack.simulate.toml_reader import join_key
+from seatrack.simulate.trajectories import Leg
+from seatrack.simulate.trajectories import Trajectory
+from seatrack.simulate.trajectories import trajectory
 
 FloatArray = NDArray[np.float64]
 

@@ -17,9 +17,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.geometry import bearing, wrap_2pi
+from seatrack.geometry import bearing
+from seatrack.geometry import wrap_2pi
 from seatrack.models.measurement import range_rate
 from seatrack.simulate.trajectories import Trajectory
 

@@ -21,8 +21,14 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.geometry import knots_to_mps, velocity_from_course
-from seatrack.simulate import Leg, Measurements, NoiseModel, Trajectory, observe, trajectory
+from seatrack.geometry import knots_to_mps
+from seatrack.geometry import velocity_from_course
+from seatrack.simulate import Leg
+from seatrack.simulate import Measurements
+from seatrack.simulate import NoiseModel
+from seatrack.simulate import Trajectory
+from seatrack.simulate import observe
+from seatrack.simulate import trajectory
 from seatrack.tma.legs import leg_starts
 from seatrack.tma.problem import Bearings
 

@@ -15,14 +15,17 @@ no later computation overflows or allocates without bound because of a typo like
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.geometry import KNOT_MPS
-from seatrack.io.table import MAX_DISTANCE_M, MAX_TIME_S, InputError
+from seatrack.io.table import MAX_DISTANCE_M
+from seatrack.io.table import MAX_TIME_S
+from seatrack.io.table import InputError
 
 __all__ = ["SUFFIX_LIMITS", "TomlReader", "join_key", "describe", "suffix_limit"]
 

@@ -19,9 +19,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.geometry import G0, wrap_2pi
+from seatrack.geometry import G0
+from seatrack.geometry import wrap_2pi
 
 FloatArray = NDArray[np.float64]
 

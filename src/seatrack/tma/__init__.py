@@ -17,14 +17,24 @@ Module layering inside the package (each imports only those above it): ``legs``,
 ``group`` -> ``detect`` -> ``solver`` -> ``tracker``.
 """
 
-from seatrack.tma.bounds import crb, ellipse, operator_values, position_crb
+from seatrack.tma.bounds import crb
+from seatrack.tma.bounds import ellipse
+from seatrack.tma.bounds import operator_values
+from seatrack.tma.bounds import position_crb
 from seatrack.tma.config import TMAConfig
-from seatrack.tma.detect import LegDetection, detect_legs
-from seatrack.tma.legs import leg_starts, leg_time_matrix
-from seatrack.tma.problem import Bearings, bearing_residuals
-from seatrack.tma.result import LastEstimate, TMASolution, observer_deviation
-from seatrack.tma.solver import solve, solve_many
-from seatrack.tma.support import SupportValue, support_residuals
+from seatrack.tma.detect import LegDetection
+from seatrack.tma.detect import detect_legs
+from seatrack.tma.legs import leg_starts
+from seatrack.tma.legs import leg_time_matrix
+from seatrack.tma.problem import Bearings
+from seatrack.tma.problem import bearing_residuals
+from seatrack.tma.result import LastEstimate
+from seatrack.tma.result import TMASolution
+from seatrack.tma.result import observer_deviation
+from seatrack.tma.solver import solve
+from seatrack.tma.solver import solve_many
+from seatrack.tma.support import SupportValue
+from seatrack.tma.support import support_residuals
 from seatrack.tma.tracker import TMATracker
 
 __all__ = [

@@ -19,14 +19,20 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 from scipy.stats import chi2
 
-from seatrack.geometry import bearing, course_speed
+from seatrack.geometry import bearing
+from seatrack.geometry import course_speed
 from seatrack.information import invert_jacobian_information
 from seatrack.models.measurement import bearing_jacobian
-from seatrack.tma.legs import leg_index, leg_starts, leg_time_matrix, position_map
-from seatrack.tma.problem import Bearings, Problem
+from seatrack.tma.legs import leg_index
+from seatrack.tma.legs import leg_starts
+from seatrack.tma.legs import leg_time_matrix
+from seatrack.tma.legs import position_map
+from seatrack.tma.problem import Bearings
+from seatrack.tma.problem import Problem
 from seatrack.tma.support import SupportValue
 
 FloatArray = NDArray[np.float64]

@@ -23,17 +23,21 @@ that are not there (check ``residual_rms`` against sigma).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.tma.config import TMAConfig
-from seatrack.tma.group import Item, solve_group
-from seatrack.tma.legs import leg_index, leg_starts
+from seatrack.tma.group import Item
+from seatrack.tma.group import solve_group
+from seatrack.tma.legs import leg_index
+from seatrack.tma.legs import leg_starts
 from seatrack.tma.lm import levenberg_marquardt
-from seatrack.tma.problem import Bearings, Problem
+from seatrack.tma.problem import Bearings
+from seatrack.tma.problem import Problem
 from seatrack.tma.result import TMASolution
 from seatrack.tma.start import auto_start
 from seatrack.tma.support import SupportValue

@@ -18,8 +18,11 @@ from numpy.typing import NDArray
 
 from seatrack.tma.config import TMAConfig
 from seatrack.tma.lm import levenberg_marquardt
-from seatrack.tma.problem import Bearings, Problem
-from seatrack.tma.result import Fit, TMASolution, finalise
+from seatrack.tma.problem import Bearings
+from seatrack.tma.problem import Problem
+from seatrack.tma.result import Fit
+from seatrack.tma.result import TMASolution
+from seatrack.tma.result import finalise
 from seatrack.tma.start import auto_start
 from seatrack.tma.support import SupportValue
 

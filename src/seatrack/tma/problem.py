@@ -15,12 +15,16 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.geometry import bearing, wrap_pi
+from seatrack.geometry import bearing
+from seatrack.geometry import wrap_pi
 from seatrack.models.measurement import bearing_jacobian
 from seatrack.tma.legs import leg_time_matrix
-from seatrack.tma.support import SupportValue, support_residuals, support_rows
+from seatrack.tma.support import SupportValue
+from seatrack.tma.support import support_residuals
+from seatrack.tma.support import support_rows
 
 FloatArray = NDArray[np.float64]
 

@@ -25,15 +25,20 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from dataclasses import field
 from functools import lru_cache
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
-from scipy.stats import chi2, norm
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
+from scipy.stats import chi2
+from scipy.stats import norm
 
-from seatrack.information import RankCheck, covariance_from_jacobian
-from seatrack.tma.bounds import operator_values, position_crb
+from seatrack.information import RankCheck
+from seatrack.information import covariance_from_jacobian
+from seatrack.tma.bounds import operator_values
+from seatrack.tma.bounds import position_crb
 from seatrack.tma.config import TMAConfig
 from seatrack.tma.legs import leg_time_matrix
 from seatrack.tma.problem import Bearings

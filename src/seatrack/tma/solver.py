@@ -13,17 +13,23 @@ Spec and equations: ``docs/tma.md``. The entry points are :func:`solve` (one con
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
+from collections.abc import Sequence
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 from seatrack.tma.config import TMAConfig
 from seatrack.tma.detect import detect_legs
-from seatrack.tma.group import Item, solve_group
+from seatrack.tma.group import Item
+from seatrack.tma.group import solve_group
 from seatrack.tma.legs import leg_starts
-from seatrack.tma.problem import Bearings, bearing_residuals
-from seatrack.tma.result import LastEstimate, TMASolution, observer_deviation
+from seatrack.tma.problem import Bearings
+from seatrack.tma.problem import bearing_residuals
+from seatrack.tma.result import LastEstimate
+from seatrack.tma.result import TMASolution
+from seatrack.tma.result import observer_deviation
 from seatrack.tma.support import SupportValue
 
 FloatArray = NDArray[np.float64]

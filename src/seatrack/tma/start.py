@@ -23,7 +23,8 @@ from numpy.typing import NDArray
 
 from seatrack.tma.config import TMAConfig
 from seatrack.tma.lm import levenberg_marquardt
-from seatrack.tma.problem import Bearings, Problem
+from seatrack.tma.problem import Bearings
+from seatrack.tma.problem import Problem
 from seatrack.tma.support import SupportValue
 
 FloatArray = NDArray[np.float64]

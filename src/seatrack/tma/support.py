@@ -32,11 +32,14 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.geometry import bearing, wrap_pi
+from seatrack.geometry import bearing
+from seatrack.geometry import wrap_pi
 from seatrack.models.measurement import bearing_jacobian
-from seatrack.tma.legs import leg_index, leg_time_matrix
+from seatrack.tma.legs import leg_index
+from seatrack.tma.legs import leg_time_matrix
 
 FloatArray = NDArray[np.float64]
 

@@ -6,14 +6,12 @@ The layer above the filters: any :class:`~seatrack.filters.base.RecursiveFilter`
 per-track filter. See ``docs/tracking.md``.
 """
 
-from seatrack.tracking.tracker import (
-    MultiTargetTracker,
-    ScanResult,
-    TrackerConfig,
-    TrackerRun,
-    TrackStatus,
-    run_tracker,
-)
+from seatrack.tracking.tracker import MultiTargetTracker
+from seatrack.tracking.tracker import ScanResult
+from seatrack.tracking.tracker import TrackerConfig
+from seatrack.tracking.tracker import TrackerRun
+from seatrack.tracking.tracker import TrackStatus
+from seatrack.tracking.tracker import run_tracker
 
 __all__ = [
     "MultiTargetTracker",

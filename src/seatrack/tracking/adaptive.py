@@ -40,17 +40,18 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.filters.base import (
-    Plots,
-    PlotStatus,
-    RecursiveFilter,
-    TrackState,
-    predicted,
-    step_times,
-)
-from seatrack.filters.imm import IMMState, combine, mix
+from seatrack.filters.base import Plots
+from seatrack.filters.base import PlotStatus
+from seatrack.filters.base import RecursiveFilter
+from seatrack.filters.base import TrackState
+from seatrack.filters.base import predicted
+from seatrack.filters.base import step_times
+from seatrack.filters.imm import IMMState
+from seatrack.filters.imm import combine
+from seatrack.filters.imm import mix
 from seatrack.models.motion import cv_noise
 from seatrack.tracking.merge import moment_match
 

@@ -32,7 +32,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from seatrack.filters.registry import Method, build, method_class
+from seatrack.filters.registry import Method
+from seatrack.filters.registry import build
+from seatrack.filters.registry import method_class
 from seatrack.tracking.adaptive import NoiseLevels
 
 __all__ = [

@@ -37,7 +37,8 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 from scipy.special import expit
 
 FloatArray = NDArray[np.float64]

@@ -39,7 +39,10 @@ from numpy.typing import NDArray
 from scipy.spatial import cKDTree
 from scipy.stats import chi2
 
-from seatrack.filters.base import Plots, RecursiveFilter, SensorNoise, TrackState
+from seatrack.filters.base import Plots
+from seatrack.filters.base import RecursiveFilter
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import TrackState
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

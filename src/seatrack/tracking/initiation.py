@@ -39,9 +39,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.filters.base import Plots, SensorNoise
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
 from seatrack.tracking.association import gnn
-from seatrack.tracking.gating import MARGIN, SLACK, gate_threshold, nis_logpdf, pregate
+from seatrack.tracking.gating import MARGIN
+from seatrack.tracking.gating import SLACK
+from seatrack.tracking.gating import gate_threshold
+from seatrack.tracking.gating import nis_logpdf
+from seatrack.tracking.gating import pregate
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

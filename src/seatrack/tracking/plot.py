@@ -13,7 +13,8 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 __all__ = ["tracks_figure"]
 
@@ -91,7 +92,8 @@ def tracks_figure(
 def _draw_tracks(
     ax: Any, t: NDArray[Any], track: NDArray[Any], status: NDArray[Any], xy: NDArray[Any]
 ) -> None:
-    from matplotlib.patheffects import Normal, Stroke
+    from matplotlib.patheffects import Normal
+    from matplotlib.patheffects import Stroke
 
     order = np.lexsort((t, track))
     ids, starts = np.unique(track[order], return_index=True)

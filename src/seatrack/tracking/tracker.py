@@ -33,7 +33,8 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from dataclasses import field
 from enum import IntEnum
 from typing import Any
 
@@ -41,37 +42,39 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.config import param
-from seatrack.filters.base import (
-    Plots,
-    PlotStatus,
-    RecursiveFilter,
-    SensorNoise,
-    TrackState,
-    plot_gaussian,
-)
-from seatrack.tracking.association import gnn, jpda
-from seatrack.tracking.clutter import ClutterRate, DetectionRate, SurveillanceRegion
-from seatrack.tracking.deletion import position_std, to_delete
-from seatrack.tracking.existence import (
-    UndetectedTargets,
-    first_scan_share,
-    ipda_update,
-    jipda_update,
-    logit,
-    probability,
-    survive,
-)
-from seatrack.tracking.gating import (
-    POLAR,
-    Candidates,
-    gate,
-    innovation_space,
-    log_jacobian,
-    nis_logpdf,
-)
-from seatrack.tracking.initiation import confirmed, hopeless, polar_covariance, speed_gate_pairs
+from seatrack.filters.base import Plots
+from seatrack.filters.base import PlotStatus
+from seatrack.filters.base import RecursiveFilter
+from seatrack.filters.base import SensorNoise
+from seatrack.filters.base import TrackState
+from seatrack.filters.base import plot_gaussian
+from seatrack.tracking.association import gnn
+from seatrack.tracking.association import jpda
+from seatrack.tracking.clutter import ClutterRate
+from seatrack.tracking.clutter import DetectionRate
+from seatrack.tracking.clutter import SurveillanceRegion
+from seatrack.tracking.deletion import position_std
+from seatrack.tracking.deletion import to_delete
+from seatrack.tracking.existence import UndetectedTargets
+from seatrack.tracking.existence import first_scan_share
+from seatrack.tracking.existence import ipda_update
+from seatrack.tracking.existence import jipda_update
+from seatrack.tracking.existence import logit
+from seatrack.tracking.existence import probability
+from seatrack.tracking.existence import survive
+from seatrack.tracking.gating import POLAR
+from seatrack.tracking.gating import Candidates
+from seatrack.tracking.gating import gate
+from seatrack.tracking.gating import innovation_space
+from seatrack.tracking.gating import log_jacobian
+from seatrack.tracking.gating import nis_logpdf
+from seatrack.tracking.initiation import confirmed
+from seatrack.tracking.initiation import hopeless
+from seatrack.tracking.initiation import polar_covariance
+from seatrack.tracking.initiation import speed_gate_pairs
 from seatrack.tracking.merge import merge_hypotheses
-from seatrack.tracking.tracks import PendingPlots, TrackTable
+from seatrack.tracking.tracks import PendingPlots
+from seatrack.tracking.tracks import TrackTable
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

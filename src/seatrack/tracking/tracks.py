@@ -7,7 +7,8 @@ tracker selects and appends rows as tracks are deleted and born, scan by scan.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
+from dataclasses import fields
 from typing import Any
 
 import numpy as np

@@ -89,13 +89,19 @@ vessels, its named-tuple inputs and outputs, :class:`OutlierKind`, :class:`Force
 from __future__ import annotations
 
 from seatrack.filters.ais.config import AisTrackerConfig
-from seatrack.filters.ais.ct import ct_step, sogcog_model
-from seatrack.filters.ais.kernel import OUTLIER_KINDS, Force, KernelOutputs, OutlierKind
+from seatrack.filters.ais.ct import ct_step
+from seatrack.filters.ais.ct import sogcog_model
+from seatrack.filters.ais.kernel import OUTLIER_KINDS
+from seatrack.filters.ais.kernel import Force
+from seatrack.filters.ais.kernel import KernelOutputs
+from seatrack.filters.ais.kernel import OutlierKind
 from seatrack.filters.ais.noise import position_noise
 from seatrack.filters.ais.offsets import timestamp_offsets
 from seatrack.filters.ais.plausibility import neighbour_plausibility
-from seatrack.filters.ais.tracker import TrackStates, track_vessels
-from seatrack.filters.ais.tracks import AisTracks, track_reports
+from seatrack.filters.ais.tracker import TrackStates
+from seatrack.filters.ais.tracker import track_vessels
+from seatrack.filters.ais.tracks import AisTracks
+from seatrack.filters.ais.tracks import track_reports
 
 __all__ = [
     "AisTrackerConfig",

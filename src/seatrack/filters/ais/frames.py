@@ -20,7 +20,8 @@ from typing import Any
 
 import numba
 import numpy as np
-from numba import njit, prange
+from numba import njit
+from numba import prange
 from numpy.typing import NDArray
 
 from seatrack.filters.ais.kernel import vessel_chunks

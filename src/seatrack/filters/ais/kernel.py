@@ -28,14 +28,25 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
-from numba import njit, prange
-from numpy.typing import ArrayLike, NDArray
+from numba import njit
+from numba import prange
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.filters.ais.config import NX, AisTrackerConfig
-from seatrack.filters.ais.ct import constrain, constrain_rows, ct_f_jac, ct_q, sogcog, update2
-from seatrack.filters.ais.smoother import derived_std, smooth_segment
+from seatrack.filters.ais.config import NX
+from seatrack.filters.ais.config import AisTrackerConfig
+from seatrack.filters.ais.ct import constrain
+from seatrack.filters.ais.ct import constrain_rows
+from seatrack.filters.ais.ct import ct_f_jac
+from seatrack.filters.ais.ct import ct_q
+from seatrack.filters.ais.ct import sogcog
+from seatrack.filters.ais.ct import update2
+from seatrack.filters.ais.smoother import derived_std
+from seatrack.filters.ais.smoother import smooth_segment
 from seatrack.geometry import KNOT_MPS
-from seatrack.kalman import predict_core, update_core, wrap_angle
+from seatrack.kalman import predict_core
+from seatrack.kalman import update_core
+from seatrack.kalman import wrap_angle
 
 FloatArray = NDArray[np.float64]
 

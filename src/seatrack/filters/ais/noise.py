@@ -5,11 +5,15 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+from numba import prange
 from numpy.typing import NDArray
 
-from seatrack.filters.ais.config import CHI2_1_MEDIAN, AisTrackerConfig, trim_scale
-from seatrack.filters.ais.kernel import largest_vessel, vessel_rows
+from seatrack.filters.ais.config import CHI2_1_MEDIAN
+from seatrack.filters.ais.config import AisTrackerConfig
+from seatrack.filters.ais.config import trim_scale
+from seatrack.filters.ais.kernel import largest_vessel
+from seatrack.filters.ais.kernel import vessel_rows
 
 FloatArray = NDArray[np.float64]
 

@@ -7,10 +7,12 @@ from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+from numba import prange
 from numpy.typing import NDArray
 
-from seatrack.filters.ais.config import NX, AisTrackerConfig
+from seatrack.filters.ais.config import NX
+from seatrack.filters.ais.config import AisTrackerConfig
 
 FloatArray = NDArray[np.float64]
 

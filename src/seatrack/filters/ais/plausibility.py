@@ -11,21 +11,20 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit, prange
+from numba import njit
+from numba import prange
 from numpy.typing import NDArray
 
 from seatrack.filters.ais.config import AisTrackerConfig
-from seatrack.filters.ais.kernel import (
-    Force,
-    KernelInputs,
-    KernelOutputs,
-    OutlierKind,
-    largest_vessel,
-    run_kernel,
-    take_rows,
-    thread_chunks,
-    vessel_rows,
-)
+from seatrack.filters.ais.kernel import Force
+from seatrack.filters.ais.kernel import KernelInputs
+from seatrack.filters.ais.kernel import KernelOutputs
+from seatrack.filters.ais.kernel import OutlierKind
+from seatrack.filters.ais.kernel import largest_vessel
+from seatrack.filters.ais.kernel import run_kernel
+from seatrack.filters.ais.kernel import take_rows
+from seatrack.filters.ais.kernel import thread_chunks
+from seatrack.filters.ais.kernel import vessel_rows
 from seatrack.geometry import KNOT_MPS
 
 FloatArray = NDArray[np.float64]

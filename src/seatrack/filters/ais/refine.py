@@ -11,31 +11,29 @@ one table. :func:`refine_pass` drives one table, :func:`refine_groups` groups in
 from __future__ import annotations
 
 import functools
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
+from collections.abc import Sequence
 from dataclasses import replace
-from typing import Any, Protocol
+from typing import Any
+from typing import Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.filters.ais.config import AisTrackerConfig
-from seatrack.filters.ais.kernel import (
-    Force,
-    KernelInputs,
-    KernelOutputs,
-    OutlierKind,
-    run_kernel,
-    take_rows,
-    vessel_index,
-)
+from seatrack.filters.ais.kernel import Force
+from seatrack.filters.ais.kernel import KernelInputs
+from seatrack.filters.ais.kernel import KernelOutputs
+from seatrack.filters.ais.kernel import OutlierKind
+from seatrack.filters.ais.kernel import run_kernel
+from seatrack.filters.ais.kernel import take_rows
+from seatrack.filters.ais.kernel import vessel_index
 from seatrack.filters.ais.noise import position_noise
-from seatrack.filters.ais.offsets import (
-    OffsetScores,
-    apply_offsets,
-    estimate_prior,
-    prior_counts,
-    std_offset_scores,
-)
+from seatrack.filters.ais.offsets import OffsetScores
+from seatrack.filters.ais.offsets import apply_offsets
+from seatrack.filters.ais.offsets import estimate_prior
+from seatrack.filters.ais.offsets import prior_counts
+from seatrack.filters.ais.offsets import std_offset_scores
 from seatrack.filters.ais.plausibility import merge_outputs
 
 FloatArray = NDArray[np.float64]

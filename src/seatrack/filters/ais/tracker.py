@@ -12,20 +12,21 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
-from seatrack.filters.ais.config import NX, AisTrackerConfig
-from seatrack.filters.ais.kernel import (
-    Force,
-    KernelInputs,
-    KernelOutputs,
-    run_kernel,
-    vessel_index,
-    vessel_starts,
-)
+from seatrack.filters.ais.config import NX
+from seatrack.filters.ais.config import AisTrackerConfig
+from seatrack.filters.ais.kernel import Force
+from seatrack.filters.ais.kernel import KernelInputs
+from seatrack.filters.ais.kernel import KernelOutputs
+from seatrack.filters.ais.kernel import run_kernel
+from seatrack.filters.ais.kernel import vessel_index
+from seatrack.filters.ais.kernel import vessel_starts
 from seatrack.filters.ais.noise import position_noise
 from seatrack.filters.ais.plausibility import revisit
-from seatrack.filters.ais.refine import Refinement, refine_groups
+from seatrack.filters.ais.refine import Refinement
+from seatrack.filters.ais.refine import refine_groups
 
 FloatArray = NDArray[np.float64]
 

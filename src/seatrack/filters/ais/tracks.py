@@ -7,13 +7,20 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import ArrayLike
+from numpy.typing import NDArray
 
 from seatrack.filters.ais.config import AisTrackerConfig
-from seatrack.filters.ais.frames import north_convergence_rows, plane_to_wgs84, vessel_planes
+from seatrack.filters.ais.frames import north_convergence_rows
+from seatrack.filters.ais.frames import plane_to_wgs84
+from seatrack.filters.ais.frames import vessel_planes
 from seatrack.filters.ais.kernel import vessel_starts
-from seatrack.filters.ais.tracker import TrackStates, VesselInputs, track_vessel_groups
-from seatrack.geometry import KNOT_MPS, bearing, wrap_2pi
+from seatrack.filters.ais.tracker import TrackStates
+from seatrack.filters.ais.tracker import VesselInputs
+from seatrack.filters.ais.tracker import track_vessel_groups
+from seatrack.geometry import KNOT_MPS
+from seatrack.geometry import bearing
+from seatrack.geometry import wrap_2pi
 
 FloatArray = NDArray[np.float64]
 

@@ -9,27 +9,29 @@ mixed), :mod:`~.nmea` (NMEA sentences), :mod:`~.read` (choosing the reader),
 :mod:`~.cluster` (Dask).
 """
 
-from seatrack.io.ais.columnar import SCHEMAS, detect_schema
-from seatrack.io.ais.output import (
-    TRACK_COLUMNS,
-    TracksWriter,
-    format_times,
-    track_columns,
-    write_tracks,
-    write_tracks_csv,
-)
-from seatrack.io.ais.pipeline import DEFAULT_MEMORY_LIMIT, RunSummary, track_files
-from seatrack.io.ais.read import looks_like_nmea, read_ais, read_ais_csv, read_file
-from seatrack.io.ais.reports import (
-    REJECT_REASONS,
-    AisReports,
-    concat_reports,
-    output_order,
-    parse_times,
-    rejection_counts,
-    to_local,
-    validate_reports,
-)
+from seatrack.io.ais.columnar import SCHEMAS
+from seatrack.io.ais.columnar import detect_schema
+from seatrack.io.ais.output import TRACK_COLUMNS
+from seatrack.io.ais.output import TracksWriter
+from seatrack.io.ais.output import format_times
+from seatrack.io.ais.output import track_columns
+from seatrack.io.ais.output import write_tracks
+from seatrack.io.ais.output import write_tracks_csv
+from seatrack.io.ais.pipeline import DEFAULT_MEMORY_LIMIT
+from seatrack.io.ais.pipeline import RunSummary
+from seatrack.io.ais.pipeline import track_files
+from seatrack.io.ais.read import looks_like_nmea
+from seatrack.io.ais.read import read_ais
+from seatrack.io.ais.read import read_ais_csv
+from seatrack.io.ais.read import read_file
+from seatrack.io.ais.reports import REJECT_REASONS
+from seatrack.io.ais.reports import AisReports
+from seatrack.io.ais.reports import concat_reports
+from seatrack.io.ais.reports import output_order
+from seatrack.io.ais.reports import parse_times
+from seatrack.io.ais.reports import rejection_counts
+from seatrack.io.ais.reports import to_local
+from seatrack.io.ais.reports import validate_reports
 
 __all__ = [
     "AisReports",

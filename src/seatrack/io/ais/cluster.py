@@ -24,7 +24,9 @@ import contextlib
 import functools
 import os
 import shutil
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable
+from collections.abc import Iterator
+from collections.abc import Sequence
 from operator import itemgetter
 from pathlib import Path
 from typing import Any
@@ -35,14 +37,24 @@ from numpy.typing import NDArray
 from seatrack.compiled import compile_all
 from seatrack.filters.ais import AisTrackerConfig
 from seatrack.filters.ais.offsets import prior_counts
-from seatrack.filters.ais.refine import Refinement, drive, n_ident
+from seatrack.filters.ais.refine import Refinement
+from seatrack.filters.ais.refine import drive
+from seatrack.filters.ais.refine import n_ident
 from seatrack.filters.ais.tracker import track_vessel_groups
-from seatrack.filters.ais.tracks import prepare_reports, tracks_from_states
-from seatrack.io.ais.output import TracksWriter, track_columns, tracks_table
-from seatrack.io.ais.pipeline import GroupState, RunSummary, finish_group, start_group
+from seatrack.filters.ais.tracks import prepare_reports
+from seatrack.filters.ais.tracks import tracks_from_states
+from seatrack.io.ais.output import TracksWriter
+from seatrack.io.ais.output import track_columns
+from seatrack.io.ais.output import tracks_table
+from seatrack.io.ais.pipeline import GroupState
+from seatrack.io.ais.pipeline import RunSummary
+from seatrack.io.ais.pipeline import finish_group
+from seatrack.io.ais.pipeline import start_group
 from seatrack.io.ais.read import file_blocks
-from seatrack.io.ais.reports import AisReports, concat_reports
-from seatrack.io.atomic import OutputError, check_output_path
+from seatrack.io.ais.reports import AisReports
+from seatrack.io.ais.reports import concat_reports
+from seatrack.io.atomic import OutputError
+from seatrack.io.atomic import check_output_path
 
 __all__ = ["track_files_dask", "dask_client"]
 
@@ -166,7 +178,8 @@ class _DaskGroups:
 def dask_client(scheduler: str | None = None, processes: bool = True) -> Iterator[Any]:
     """A ``distributed.Client`` of ``scheduler`` (an address) or of a new local cluster."""
     try:
-        from distributed import Client, LocalCluster
+        from distributed import Client
+        from distributed import LocalCluster
     except ImportError:
         raise ValueError(
             "--dask needs dask and distributed: pip install 'seatrack[dask]'"

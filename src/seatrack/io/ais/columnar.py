@@ -25,14 +25,19 @@ from __future__ import annotations
 
 import csv
 import io
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.io.ais.reports import AisReports, check_rows, mark, mmsi_codes, parse_times
+from seatrack.io.ais.reports import AisReports
+from seatrack.io.ais.reports import check_rows
+from seatrack.io.ais.reports import mark
+from seatrack.io.ais.reports import mmsi_codes
+from seatrack.io.ais.reports import parse_times
 from seatrack.io.table import InputError
 
 FloatArray = NDArray[np.float64]
@@ -136,7 +141,8 @@ def read_header(path: Path) -> list[str]:
     """The first line of a (maybe compressed) CSV file as column names (BOM removed)."""
     with open_input(path) as stream:
         head = stream.read(1 << 16)
-    first = head.split(b"\n", 1)[0].rstrip(b"\r")
+    lines = head.splitlines()  # LF, CRLF or CR line ends
+    first = lines[0] if lines else b""
     if not first.strip():
         raise InputError(f"{path}: file is empty (expected a header row)")
     text = first.decode("utf-8", errors="replace").lstrip("\ufeff")

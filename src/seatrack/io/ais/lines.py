@@ -23,9 +23,16 @@ from pathlib import Path
 
 import numpy as np
 
-from seatrack.io.ais.columnar import SCHEMAS, detect_schema, from_text_columns, open_input
-from seatrack.io.ais.nmea import is_nmea_line, nmea_rows
-from seatrack.io.ais.reports import AisReports, concat_reports, mark, reject_code
+from seatrack.io.ais.columnar import SCHEMAS
+from seatrack.io.ais.columnar import detect_schema
+from seatrack.io.ais.columnar import from_text_columns
+from seatrack.io.ais.columnar import open_input
+from seatrack.io.ais.nmea import is_nmea_line
+from seatrack.io.ais.nmea import nmea_rows
+from seatrack.io.ais.reports import AisReports
+from seatrack.io.ais.reports import concat_reports
+from seatrack.io.ais.reports import mark
+from seatrack.io.ais.reports import reject_code
 from seatrack.io.table import InputError
 
 __all__ = ["read_lines", "parse_lines", "decode_line"]
@@ -158,7 +165,5 @@ def read_lines(path: Path) -> AisReports:
         data = stream.read()
     if not data.strip():
         raise InputError(f"{path}: file is empty")
-    lines = data.split(b"\n")
-    if lines and lines[-1] == b"":
-        lines.pop()  # the line end of the last line
-    return parse_lines(lines, str(path))
+    # universal line ends (LF, CRLF and the old CR alone), as Python's text files read them
+    return parse_lines(data.splitlines(), str(path))

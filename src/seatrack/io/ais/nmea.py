@@ -22,7 +22,8 @@ same file."""
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from dataclasses import field
 from functools import reduce
 from operator import xor
 from typing import Any
@@ -102,7 +103,8 @@ def nmea_rows(items: list[tuple[int, bytes]]) -> tuple[list[NmeaRow], dict[str, 
     """Rows of NMEA lines ``(line number, stripped bytes)`` in line order (see the module
     docstring) and the counts of the lines that hold no report, by kind."""
     from pyais.exceptions import AISBaseException
-    from pyais.messages import AISSentence, NMEASentenceFactory
+    from pyais.messages import AISSentence
+    from pyais.messages import NMEASentenceFactory
 
     rows: list[NmeaRow] = []
     skipped: dict[str, int] = {}

@@ -20,8 +20,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.filters.ais import OUTLIER_KINDS
-from seatrack.geometry import bearing_rad_to_deg, mps_to_knots
-from seatrack.io.ais.reports import REASON_LABELS, TIME_MAX, TIME_MIN, AisReports, output_order
+from seatrack.geometry import bearing_rad_to_deg
+from seatrack.geometry import mps_to_knots
+from seatrack.io.ais.reports import REASON_LABELS
+from seatrack.io.ais.reports import TIME_MAX
+from seatrack.io.ais.reports import TIME_MIN
+from seatrack.io.ais.reports import AisReports
+from seatrack.io.ais.reports import output_order
 from seatrack.io.atomic import atomic_path
 
 __all__ = [

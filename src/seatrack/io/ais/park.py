@@ -22,7 +22,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.filters.ais.offsets import OffsetScores, prior_counts
+from seatrack.filters.ais.offsets import OffsetScores
+from seatrack.filters.ais.offsets import prior_counts
 from seatrack.filters.ais.refine import Refinement
 
 __all__ = ["Parked", "ParkedGroups", "nbytes", "dump", "undump"]

@@ -23,8 +23,10 @@ from __future__ import annotations
 
 import resource
 import tempfile
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from collections.abc import Callable
+from collections.abc import Sequence
+from dataclasses import dataclass
+from dataclasses import field
 from pathlib import Path
 from typing import Any
 
@@ -32,29 +34,29 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.filters.ais import AisTrackerConfig
-from seatrack.filters.ais.refine import InMemory, Refinement, drive
-from seatrack.filters.ais.tracker import (
-    first_track,
-    prepare_rows,
-    track_states,
-    track_vessel_groups,
-)
-from seatrack.filters.ais.tracks import (
-    AisTracks,
-    ReportPlanes,
-    prepare_reports,
-    tracks_from_states,
-)
-from seatrack.io.ais.output import TracksWriter, track_columns
-from seatrack.io.ais.park import Parked, ParkedGroups, dump, undump
+from seatrack.filters.ais.refine import InMemory
+from seatrack.filters.ais.refine import Refinement
+from seatrack.filters.ais.refine import drive
+from seatrack.filters.ais.tracker import first_track
+from seatrack.filters.ais.tracker import prepare_rows
+from seatrack.filters.ais.tracker import track_states
+from seatrack.filters.ais.tracker import track_vessel_groups
+from seatrack.filters.ais.tracks import AisTracks
+from seatrack.filters.ais.tracks import ReportPlanes
+from seatrack.filters.ais.tracks import prepare_reports
+from seatrack.filters.ais.tracks import tracks_from_states
+from seatrack.io.ais.output import TracksWriter
+from seatrack.io.ais.output import track_columns
+from seatrack.io.ais.park import Parked
+from seatrack.io.ais.park import ParkedGroups
+from seatrack.io.ais.park import dump
+from seatrack.io.ais.park import undump
 from seatrack.io.ais.read import file_blocks
-from seatrack.io.ais.reports import (
-    REASON_LABELS,
-    AisReports,
-    concat_reports,
-    mark_duplicates,
-    rejection_counts,
-)
+from seatrack.io.ais.reports import REASON_LABELS
+from seatrack.io.ais.reports import AisReports
+from seatrack.io.ais.reports import concat_reports
+from seatrack.io.ais.reports import mark_duplicates
+from seatrack.io.ais.reports import rejection_counts
 
 __all__ = [
     "DEFAULT_MEMORY_LIMIT",

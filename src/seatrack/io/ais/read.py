@@ -9,21 +9,22 @@ Every line gets a row (or a count in ``skipped``) with its line number either wa
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
-from seatrack.io.ais.columnar import (
-    NotColumnar,
-    is_parquet,
-    iter_csv_blocks,
-    iter_parquet_blocks,
-    open_input,
-)
+from seatrack.io.ais.columnar import NotColumnar
+from seatrack.io.ais.columnar import is_parquet
+from seatrack.io.ais.columnar import iter_csv_blocks
+from seatrack.io.ais.columnar import iter_parquet_blocks
+from seatrack.io.ais.columnar import open_input
 from seatrack.io.ais.lines import read_lines
 from seatrack.io.ais.nmea import is_nmea_line
-from seatrack.io.ais.reports import AisReports, concat_reports, mark_duplicates
+from seatrack.io.ais.reports import AisReports
+from seatrack.io.ais.reports import concat_reports
+from seatrack.io.ais.reports import mark_duplicates
 from seatrack.io.table import InputError
 
 __all__ = ["file_blocks", "read_file", "read_ais", "read_ais_csv", "looks_like_nmea"]
@@ -34,7 +35,7 @@ def looks_like_nmea(path: str | Path) -> bool:
     p = Path(path)
     with open_input(p) as stream:
         head = stream.read(1 << 16)
-    for raw in head.split(b"\n"):
+    for raw in head.splitlines():
         line = raw.strip().lstrip(b"\xef\xbb\xbf")
         if line:
             return is_nmea_line(line)

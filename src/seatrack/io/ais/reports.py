@@ -13,13 +13,16 @@ from __future__ import annotations
 
 import re
 from collections.abc import Sequence
-from dataclasses import dataclass, field
-from datetime import UTC, datetime
+from dataclasses import dataclass
+from dataclasses import field
+from datetime import UTC
+from datetime import datetime
 
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.geometry import LocalFrame, local_frames
+from seatrack.geometry import LocalFrame
+from seatrack.geometry import local_frames
 from seatrack.io.table import InputError
 
 FloatArray = NDArray[np.float64]

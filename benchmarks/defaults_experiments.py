@@ -470,7 +470,10 @@ def consistency(n: int) -> None:
         ),
         "mm-spec": ("mm-spec", {}),
         "imm": ("imm", {}),
-        "mm-rangerate (IMM + rr, q_ct 1000)": ("mm-rangerate", {}),
+        "mm-rangerate (IMM + rr, q_ct 1000)": (
+            "mm-rangerate", {"q_agile": 0.0, "q_omega": 1e-3, "p_stay": 0.95}
+        ),
+        "mm-rangerate (default, + agile CV)": ("mm-rangerate", {}),
         "mm (level IMM)": ("mm", {}),
     }  # fmt: skip
     for label, (method, cfg) in cfgs.items():

@@ -75,10 +75,10 @@ from seatrack.filters.base import Plots
 from seatrack.filters.base import SensorNoise
 from seatrack.filters.base import plot_gaussian
 from seatrack.filters.converted import convert_plots
+from seatrack.filters.cvct_imm import CVCTIMM
+from seatrack.filters.cvct_imm import CVCTIMMConfig
 from seatrack.filters.ekf import EKF
 from seatrack.filters.ekf import EKFConfig
-from seatrack.filters.imm import CVCTIMM
-from seatrack.filters.imm import CVCTIMMConfig
 from seatrack.filters.multimodel import MultiModelConfig
 from seatrack.filters.multimodel import MultiModelFilter
 from seatrack.simulate import Leg

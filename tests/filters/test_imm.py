@@ -98,6 +98,58 @@ def test_unequal_state_sizes_mix_by_name():
     assert np.all(np.linalg.eigvalsh(Pct) > 0)
 
 
+@pytest.mark.parametrize("batch", [(), (7,)])
+def test_shared_measurement_update_is_the_per_model_update(batch):
+    """CV, CT and an agile CV with range bearing and range rate: the one batched extended
+    update over the model axis (padded layout) equals the model-by-model update."""
+    from seatrack.models import RangeRate
+    from seatrack.models import Stacked
+
+    def meas(n):
+        return Stacked([RangeBearing(n=n), RangeRate(n=n, pos=(0, 1), vel=(2, 3))])
+
+    models = [
+        ConstantVelocity(q=0.1),
+        CoordinatedTurn(q=10.0, q_omega=1e-3),
+        ConstantVelocity(q=300.0),
+    ]
+    PI3 = np.full((3, 3), 0.02) + np.eye(3) * 0.94
+    fused = IMM(models, PI3, [meas(4), meas(5), meas(4)])
+    loop = IMM(models, PI3, [meas(4), meas(5), meas(4)])
+    loop._shared = None  # the model-by-model path
+    assert fused._shared is not None
+    rng = np.random.default_rng(3)
+    x0 = np.array([3000.0, 4000.0, -150.0, 80.0])
+    st = fused.initial_state(
+        np.broadcast_to(x0, batch + (4,)),
+        np.broadcast_to(np.diag([1e4, 1e4, 400, 400.0]), batch + (4, 4)),
+        extra={"w": (0.0, 0.01)},
+    )
+    for _ in range(4):
+        pred = fused.predict(st, 2.0)
+        z = np.stack(
+            [
+                np.hypot(*x0[:2]) + rng.normal(0, 20, batch),
+                np.arctan2(x0[0], x0[1]) + rng.normal(0, 0.004, batch),
+                rng.normal(-20, 5, batch),
+            ],
+            -1,
+        )
+        R = np.broadcast_to(np.diag([400.0, 0.004**2, 1.0]), batch + (3, 3))
+        sensor = np.broadcast_to(np.array([10.0, 20.0, 0.5, -0.5]), batch + (4,))
+        a = fused.update(pred, z, R, sensor)
+        b = loop.update(pred, z, R, sensor)
+        for u, v in zip(
+            (a.x, a.P, a.log_likelihood, a.model_log_likelihood, a.nis, a.state.mu),
+            (b.x, b.P, b.log_likelihood, b.model_log_likelihood, b.nis, b.state.mu),
+            strict=True,
+        ):
+            np.testing.assert_allclose(u, v, rtol=1e-12, atol=1e-12)
+        for j, n in enumerate((4, 5, 4)):  # each model's own layout
+            np.testing.assert_allclose(a.state.X[..., j, :n], b.state.X[..., j, :n], rtol=1e-12)
+        st = a.state
+
+
 def test_cv_ct_imm_tracks_turn_better_than_cv_and_is_consistent():
     dt = 2.0
     speed = 15.0

@@ -94,3 +94,23 @@ def test_compiled_polar_measurement_equals_the_model_objects(d, rr):
     hx, H = polar_measurement(x, s, d, rr)
     np.testing.assert_allclose(hx, m.h(x, s), rtol=1e-12, atol=1e-9)
     np.testing.assert_allclose(H, m.jacobian(x, s), rtol=1e-12, atol=1e-15)
+
+
+def test_in_layout_reads_the_same_components_of_a_padded_state():
+    """A CV model's measurement on the CV + CT layout ``[x, y, vx, vy, w]``: same ``h``,
+    Jacobian zero on the padding, equal for every model of a prefix layout."""
+    from seatrack.models.measurement import in_layout
+
+    m4 = Stacked([RangeBearing(n=4), RangeRate(n=4, pos=(0, 1), vel=(2, 3))])
+    m5 = Stacked([RangeBearing(n=5), RangeRate(n=5, pos=(0, 1), vel=(2, 3))])
+    u4, u5 = in_layout(m4, 5), in_layout(m5, 5)
+    assert u4 == u5
+    x5 = np.array([3000.0, -2000.0, 12.0, -7.0, 0.03])
+    sensor = np.array([100.0, 50.0, 1.0, 2.0])
+    np.testing.assert_array_equal(u4.h(x5, sensor), m4.h(x5[:4], sensor))
+    H = u4.jacobian(x5, sensor)
+    np.testing.assert_array_equal(H[:, :4], m4.jacobian(x5[:4], sensor))
+    np.testing.assert_array_equal(H[:, 4], 0.0)
+    assert in_layout(object(), 5) is None
+    with pytest.raises(ValueError, match="cannot read"):
+        in_layout(Position(n=6, pos=(0, 1, 2)), 4)

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 
 from seatrack.config import ConfigError
+from seatrack.filters.cvct_imm import CVCTIMM
 from seatrack.filters.ekf import EKF
-from seatrack.filters.imm import CVCTIMM
 from seatrack.filters.registry import METHODS
 from seatrack.tracking.adaptive import NoiseLevels
 from seatrack.tracking.auto import AUTO_NOISE

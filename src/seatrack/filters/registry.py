@@ -80,7 +80,7 @@ _MM = "seatrack.filters.multimodel"
 #: evidence).
 METHODS: dict[str, tuple[str, str, str]] = {
     "ekf": ("seatrack.filters.ekf", "EKF", "constant-velocity EKF on polar plots (fixed q)"),
-    "imm": ("seatrack.filters.imm", "CVCTIMM", "standard IMM, CV + coordinated turn"),
+    "imm": ("seatrack.filters.cvct_imm", "CVCTIMM", "standard IMM, CV + coordinated turn"),
     "turning": (
         "seatrack.filters.turning_imm",
         "TurningLevels",
@@ -122,9 +122,9 @@ METHODS: dict[str, tuple[str, str, str]] = {
         "Gholson & Moose bank as in JP H06-95138's prior art: 10 g hypotheses, position only",
     ),
     "mm-rangerate": (
-        "seatrack.filters.imm",
+        "seatrack.filters.cvct_imm",
         "RangeRateIMM",
-        "multiple-model filter with range rate in the update (IMM, CV + coordinated turn)",
+        "multiple-model filter, range rate in the update (IMM: CV, CT, agile CV)",
     ),
     "mm-rangerate-spec": (
         _MM,

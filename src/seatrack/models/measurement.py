@@ -16,6 +16,7 @@ in ``tests/models/test_measurement.py``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -40,6 +41,7 @@ __all__ = [
     "RangeRate",
     "Position",
     "Stacked",
+    "in_layout",
     "bearing_jacobian",
     "range_bearing_jacobian",
     "range_bearing_elevation_jacobian",
@@ -303,6 +305,21 @@ class Stacked:
 
     def jacobian(self, x: ArrayLike, sensor: ArrayLike | None = None) -> FloatArray:
         return np.concatenate([p.jacobian(x, sensor) for p in self.parts], -2)
+
+
+def in_layout(model: Any, n: int) -> Any:
+    """The measurement ``model`` of a state of ``n`` components whose leading components are
+    the model's own state (e.g. a CV model's measurement on the padded ``[x, y, vx, vy, w]``
+    of a CV + CT bank): the same ``h``, its Jacobian zero on the extra components. ``None``
+    when the model does not say which components it reads (no ``n`` field)."""
+    if isinstance(model, Stacked):
+        parts = [in_layout(p, n) for p in model.parts]
+        return None if any(p is None for p in parts) else Stacked(tuple(parts))
+    if dataclasses.is_dataclass(model) and any(f.name == "n" for f in dataclasses.fields(model)):
+        if model.n > n:  # type: ignore[union-attr]
+            raise ValueError(f"a model of {model.n} components cannot read a state of {n}")  # type: ignore[union-attr]
+        return dataclasses.replace(model, n=n)  # type: ignore[type-var]
+    return None
 
 
 # ---------------------------------------------------------------------------

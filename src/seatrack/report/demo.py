@@ -58,8 +58,8 @@ WHEN: dict[str, str] = {
     "mm": "any target when you know only the sensor noise: an IMM of process-noise levels "
     "(the engine of turning, without its heading outputs)",
     "mm-spec": "the Gholson & Moose bank of 10 g hypotheses, for comparison",
-    "mm-rangerate": "pulse-Doppler radar on agile targets: range rate in the update of a "
-    "CV + coordinated-turn IMM",
+    "mm-rangerate": "pulse-Doppler radar on agile targets: range rate in the update of an "
+    "IMM of CV, coordinated-turn and agile CV models (turns and weaving)",
     "mm-rangerate-spec": "JP H06-95138 as written (range rate only in the reliabilities), for "
     "comparison",
     "tma": "passive sonar, bearings only: batch target motion analysis (own ship manoeuvres)",

@@ -74,6 +74,7 @@ __all__ = [
     "common_columns",
     "cartesian_names",
     "converted_positions",
+    "accel_sigma_param",
     "conversion_param",
     "speed_sigma_param",
     "usable",
@@ -387,6 +388,19 @@ def speed_sigma_param(default: float, aliases: Sequence[str] = ()) -> Any:
         min=0,
         exclusive_min=True,
         aliases=aliases,
+    )
+
+
+def accel_sigma_param(key: str, psd: str) -> Any:
+    """An acceleration-std field (m/s^2, default 0: none) whose PSD ``a^2 T`` is added each
+    scan to the PSD field named ``psd`` -- what a target class sets so that the process
+    noise follows the scan interval."""
+    return param(
+        0.0,
+        key=key,
+        unit="m/s^2",
+        doc=f"acceleration std whose PSD a^2 T is added to {psd} each scan (a target sets it)",
+        min=0,
     )
 
 

@@ -26,6 +26,7 @@ from seatrack.config import param
 from seatrack.filters.base import Plots
 from seatrack.filters.base import SensorNoise
 from seatrack.filters.base import TrackState
+from seatrack.filters.base import accel_sigma_param
 from seatrack.filters.base import common_columns
 from seatrack.filters.base import conversion_param
 from seatrack.filters.base import converted_positions
@@ -74,24 +75,14 @@ class CVCTIMMConfig:
         exclusive_min=True,
     )
     use_range_rate: bool = param(False, doc="stack the range rate with the converted position")
-    sigma_accel_cv: float = param(
-        0.0, key="sigma_accel_cv_mps2", unit="m/s^2",
-        doc="CV: acceleration std whose PSD a^2 T is added to q_cv (a target sets it)", min=0,
-    )  # fmt: skip
-    sigma_accel_ct: float = param(
-        0.0, key="sigma_accel_ct_mps2", unit="m/s^2",
-        doc="CT: acceleration std whose PSD a^2 T is added to q_ct (a target sets it)", min=0,
-    )  # fmt: skip
+    sigma_accel_cv: float = accel_sigma_param("sigma_accel_cv_mps2", "q_cv")
+    sigma_accel_ct: float = accel_sigma_param("sigma_accel_ct_mps2", "q_ct")
     q_agile: float = param(
         0.0, unit="m^2/s^3", min=0,
         doc="a third model, an agile CV with this PSD, when > 0 (or sigma_accel_agile > 0): "
         "manoeuvres no constant turn rate fits (weaving, jinking)",
     )  # fmt: skip
-    sigma_accel_agile: float = param(
-        0.0, key="sigma_accel_agile_mps2", unit="m/s^2",
-        doc="agile CV: acceleration std whose PSD a^2 T is added to q_agile (a target sets it)",
-        min=0,
-    )  # fmt: skip
+    sigma_accel_agile: float = accel_sigma_param("sigma_accel_agile_mps2", "q_agile")
 
     @property
     def agile(self) -> bool:

@@ -22,6 +22,7 @@ from seatrack.filters.base import CartesianState
 from seatrack.filters.base import ConfiguredFilter
 from seatrack.filters.base import Plots
 from seatrack.filters.base import TrackState
+from seatrack.filters.base import accel_sigma_param
 from seatrack.filters.base import common_columns
 from seatrack.filters.base import finish_update
 from seatrack.filters.base import measurement_model
@@ -55,11 +56,7 @@ class EKFConfig:
     q: float = param(1.0, unit="m^2/s^3", doc="white-noise acceleration PSD", min=0)
     initial_speed_sigma: float = speed_sigma_param(50.0)
     use_range_rate: bool = param(True, doc="use the plots' range rate when they have one")
-    sigma_accel: float = param(
-        0.0, key="sigma_accel_mps2", unit="m/s^2",
-        doc="acceleration std whose PSD a^2 T is added to q each scan (a target sets it)",
-        min=0,
-    )  # fmt: skip
+    sigma_accel: float = accel_sigma_param("sigma_accel_mps2", "q")
 
     @classmethod
     def for_target(cls, target: TargetClass) -> EKFConfig:

@@ -112,6 +112,18 @@ def test_every_input_line_is_accounted_for(tmp_path_factory, data, nmea):
         assert rows + skipped == _records(raw, nmea)
 
 
+@pytest.mark.parametrize("padded", ["mmsi ", " lon"])
+def test_padded_column_names_read_as_the_plain_ones(tmp_path, padded):
+    """A header name with white space around it (``mmsi ,``): the same rows as without (it
+    was an internal error: pyarrow selects columns by their exact names)."""
+    text = CSV_TEXT.encode()
+    bad = CSV_TEXT.replace(padded.strip() + ",", padded + ",", 1).encode()
+    (tmp_path / "a").mkdir()
+    (tmp_path / "b").mkdir()
+    assert _run(tmp_path / "a", text, "a.csv") == _run(tmp_path / "b", bad, "a.csv")
+    assert _run(tmp_path / "a", text, "a.csv")[1] == _records(text, False)
+
+
 @pytest.mark.parametrize("nmea", [False, True])
 @pytest.mark.parametrize("end", [b"\r\n", b"\r"])
 def test_old_line_ends_read_as_lines(tmp_path, nmea, end):

@@ -65,6 +65,23 @@ def test_all_tracks_and_jpda(tmp_path):
     assert "tentative" in {x["status"] for x in _rows(tmp_path / "t.csv")}
 
 
+@pytest.mark.parametrize("method", ["ekf", "imm", "turning"])
+def test_no_confirmed_track_writes_the_header_and_accounts_for_every_plot(tmp_path, method):
+    """One plot (or clutter only): no track is ever confirmed -- a header-only TRACKS.csv,
+    every plot `clutter` in --plots-out, exit 0 (it was an internal error: no columns)."""
+    (tmp_path / "p.csv").write_text(
+        "time_s,range_m,azimuth_deg,elevation_deg,range_rate_mps\n0,9506.91,31.82,6.5973,54.571\n"
+    )
+    r = _seatrack("track", "p.csv", "-o", "t.csv", "--method", method, "--plots-out", "pl.csv",
+                  "--plot", "t.png", cwd=tmp_path)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    assert "0 confirmed tracks" in r.stdout
+    head = (tmp_path / "t.csv").read_text().splitlines()
+    assert len(head) == 1 and head[0].startswith("track,time_s,x_m,y_m,z_m")
+    assert [x["track"] for x in _rows(tmp_path / "pl.csv")] == ["clutter"]
+    assert (tmp_path / "t.png").stat().st_size > 0
+
+
 def test_errors_are_one_line(tmp_path):
     _plots_file(tmp_path / "plots.csv")
     r = _seatrack("track", "plots.csv", "-o", "t.csv", "--association", "mht", cwd=tmp_path)

@@ -204,7 +204,8 @@ def write_tracks(path: str | Path, run: TrackerRun, plots: Plots) -> int:
     cols = [
         run.track.astype(str),
         np.char.mod("%.6f", run.t) if n else np.zeros(0, str),
-        *(_text(np.asarray(run.columns[c])) for c in COMMON_COLUMNS),
+        # no confirmed track at all (clutter only, a short file): the header and no rows
+        *(_text(np.asarray(run.columns.get(c, np.zeros(0)))) for c in COMMON_COLUMNS),
         labels[run.status],
         np.where(line >= 0, line.astype(str), ""),
         *(_text(np.asarray(run.columns[c])) for c in extra),

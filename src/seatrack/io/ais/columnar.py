@@ -138,7 +138,8 @@ def is_parquet(path: Path) -> bool:
 
 
 def read_header(path: Path) -> list[str]:
-    """The first line of a (maybe compressed) CSV file as column names (BOM removed)."""
+    """The first line of a (maybe compressed) CSV file as column names, as written (BOM
+    removed, white space kept: pyarrow selects columns by their exact names)."""
     with open_input(path) as stream:
         head = stream.read(1 << 16)
     lines = head.splitlines()  # LF, CRLF or CR line ends
@@ -150,7 +151,7 @@ def read_header(path: Path) -> list[str]:
         row = next(csv.reader([text]))
     except csv.Error as exc:
         raise InputError(f"{path}, line 1: not valid CSV ({exc})") from None
-    return [h.strip() for h in row]
+    return row
 
 
 class _CountingReader(io.RawIOBase):
@@ -324,6 +325,8 @@ def iter_csv_blocks(
     import pyarrow.csv as pcsv
 
     header = read_header(path)
+    if any(h != h.strip() for h in header):  # the line reader strips the names
+        raise NotColumnar("column names padded with white space")
     try:
         schema = detect_schema(header)
     except InputError as exc:

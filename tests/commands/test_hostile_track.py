@@ -52,6 +52,17 @@ def plots_text(n: int = 20) -> str:
 PLOTS = plots_text()
 
 
+def _labelled(data: bytes) -> bool:
+    """Whether the (mutated) header still has a ``track`` column (else the plots are
+    unlabelled and the multi-target tracker runs)."""
+    from seatrack.io.table import decode_text
+
+    text, _ = decode_text(data)
+    lines = text.splitlines()
+    head = next(csv.reader(lines[:1]), []) if lines else []
+    return "track" in [h.strip() for h in head]
+
+
 def _data_rows(data: bytes) -> int:
     return sum(1 for ln in data.splitlines()[1:] if ln.strip(b" ,\r\n\t"))
 
@@ -72,6 +83,9 @@ def _run(d: Path, plots: bytes, method: str, config: bytes | None = None) -> str
     if res.code == 0:
         with out.open(newline="") as fh:
             rows = list(csv.DictReader(fh))
+        if not _labelled(plots):  # the multi-target tracker: rows of confirmed tracks
+            assert {r["status"] for r in rows} <= {"confirmed", "coasting"}, args
+            return res.err
         assert len(rows) == _data_rows(plots), "one TRACK.csv row per plot"
         status = [r.get("status", "") for r in rows]
         blank = [i for i, r in enumerate(rows) if r["x_m"] == "" and status[i] in ("", "ok")]

@@ -33,10 +33,12 @@ dimensions. 2-D plots (no elevation) give ``d = 2`` outputs, 3-D plots ``d = 3``
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
@@ -108,59 +110,55 @@ def polar_jacobian(rng: ArrayLike, az: ArrayLike, el: ArrayLike | None = None) -
     )
 
 
-def _trig_moments(
-    ang: FloatArray, sigma: FloatArray
-) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """Moments of sin/cos of ``ang - v``, ``v ~ N(0, sigma^2)``.
+@njit(cache=True)
+def _unbiased_kernel(r, a, e, sr, sa, se, u, R):  # pragma: no cover - compiled
+    """Unbiased converted relative positions ``u (N, d)`` and their measurement-conditioned
+    covariances ``R (N, d, d)`` of flat plot arrays (``e`` and ``se`` empty for 2-D plots).
 
-    Returns ``lam, E[sin], E[cos], E[sin^2], E[cos^2], E[sin cos]`` with
-    ``lam = exp(-sigma^2 / 2)``.
-    """
-    lam = np.exp(-0.5 * sigma**2)
-    lam4 = lam**4  # exp(-2 sigma^2) = E[cos 2v]
-    s, c = np.sin(ang), np.cos(ang)
-    c2, s2 = np.cos(2 * ang), np.sin(2 * ang)
-    return lam, lam * s, lam * c, 0.5 * (1 - lam4 * c2), 0.5 * (1 + lam4 * c2), 0.5 * lam4 * s2
-
-
-def _unbiased(
-    r: FloatArray,
-    a: FloatArray,
-    e: FloatArray | None,
-    sr: FloatArray,
-    sa_: FloatArray,
-    se_: FloatArray | None,
-) -> tuple[FloatArray, FloatArray]:
-    """Unbiased converted relative position and measurement-conditioned covariance."""
-    la, Esa, Eca, Esa2, Eca2, Esca = _trig_moments(a, sa_)
-    r2 = r**2 + sr**2  # E[r_true^2 | measured]
-    if e is None:
-        u = np.stack([r * np.sin(a), r * np.cos(a)], -1) / la[..., None]
-        mu = np.stack([r * Esa, r * Eca], -1)
-        M2 = np.stack(
-            [np.stack([r2 * Esa2, r2 * Esca], -1), np.stack([r2 * Esca, r2 * Eca2], -1)], -2
-        )
-    else:
-        assert se_ is not None
-        le, Ese, Ece, Ese2, Ece2, Esce = _trig_moments(e, se_)
-        ce, sn = np.cos(e), np.sin(e)
-        u = np.stack(
-            [r * ce * np.sin(a) / (la * le), r * ce * np.cos(a) / (la * le), r * sn / le], -1
-        )
-        mu = np.stack([r * Ece * Esa, r * Ece * Eca, r * Ese], -1)
-        xx = r2 * Ece2 * Esa2
-        yy = r2 * Ece2 * Eca2
-        xy = r2 * Ece2 * Esca
-        xz = r2 * Esce * Esa
-        yz = r2 * Esce * Eca
-        zz = r2 * Ese2
-        M2 = np.stack(
-            [np.stack([xx, xy, xz], -1), np.stack([xy, yy, yz], -1), np.stack([xz, yz, zz], -1)],
-            -2,
-        )
-    um = u[..., :, None] * mu[..., None, :]
-    R = M2 - um - np.swapaxes(um, -1, -2) + u[..., :, None] * u[..., None, :]
-    return u, R
+    With ``lam = exp(-sigma^2 / 2)`` of each angle, the moments of ``sin``/``cos`` of the
+    true angle given the measured one are ``E[sin] = lam sin a``, ``E[cos] = lam cos a``,
+    ``E[sin^2] = (1 - lam^4 cos 2a) / 2``, ``E[cos^2] = (1 + lam^4 cos 2a) / 2``,
+    ``E[sin cos] = lam^4 sin 2a / 2``, and ``E[r_true^2] = r^2 + sigma_r^2``; the converted
+    position ``u`` divides the plain conversion by the ``lam`` factors, ``mu`` is its
+    conditional mean and ``M2`` its conditional second moment, ``R = M2 - u mu^T - mu u^T +
+    u u^T`` (the module docstring gives the references). One plot at a time: the
+    small batches of one scan pay no NumPy per-call cost."""
+    d = u.shape[1]
+    for i in range(r.size):
+        la = math.exp(-0.5 * sa[i] ** 2)
+        la4 = la**4
+        sn, cs = math.sin(a[i]), math.cos(a[i])
+        c2, s2 = math.cos(2.0 * a[i]), math.sin(2.0 * a[i])
+        Esa, Eca = la * sn, la * cs
+        Esa2, Eca2, Esca = 0.5 * (1 - la4 * c2), 0.5 * (1 + la4 * c2), 0.5 * la4 * s2
+        r2 = r[i] ** 2 + sr[i] ** 2
+        ri = r[i]
+        uu = np.empty(3)
+        mu = np.empty(3)
+        M2 = np.empty((3, 3))
+        if d == 2:
+            uu[0], uu[1] = ri * sn / la, ri * cs / la
+            mu[0], mu[1] = ri * Esa, ri * Eca
+            M2[0, 0], M2[0, 1], M2[1, 1] = r2 * Esa2, r2 * Esca, r2 * Eca2
+        else:
+            le = math.exp(-0.5 * se[i] ** 2)
+            le4 = le**4
+            sne, cse = math.sin(e[i]), math.cos(e[i])
+            c2e, s2e = math.cos(2.0 * e[i]), math.sin(2.0 * e[i])
+            Ese, Ece = le * sne, le * cse
+            Ese2, Ece2, Esce = 0.5 * (1 - le4 * c2e), 0.5 * (1 + le4 * c2e), 0.5 * le4 * s2e
+            uu[0] = ri * cse * sn / (la * le)
+            uu[1] = ri * cse * cs / (la * le)
+            uu[2] = ri * sne / le
+            mu[0], mu[1], mu[2] = ri * Ece * Esa, ri * Ece * Eca, ri * Ese
+            M2[0, 0], M2[0, 1], M2[1, 1] = r2 * Ece2 * Esa2, r2 * Ece2 * Esca, r2 * Ece2 * Eca2
+            M2[0, 2], M2[1, 2], M2[2, 2] = r2 * Esce * Esa, r2 * Esce * Eca, r2 * Ese2
+        for j in range(d):
+            u[i, j] = uu[j]
+            for k in range(j, d):
+                v = M2[j, k] - uu[j] * mu[k] - mu[j] * uu[k] + uu[j] * uu[k]
+                R[i, j, k] = v
+                R[i, k, j] = v
 
 
 def convert_plots(
@@ -236,7 +234,13 @@ def convert_plots(
         sig = np.stack([sr, sa_] if se_ is None else [sr, sa_, se_], -1)
         R = np.einsum("...ik,...k,...jk->...ij", J, sig**2, J)
     else:
-        u, R = _unbiased(r, a, e, sr, sa_, se_)
+        n = int(np.prod(shape))
+        u, R = np.empty((n, d)), np.empty((n, d, d))
+        flat = [np.ascontiguousarray(v, dtype=float).reshape(n) for v in (r, a, sr, sa_)]
+        ee = np.zeros(0) if e is None else np.ascontiguousarray(e, dtype=float).reshape(n)
+        se = np.zeros(0) if se_ is None else np.ascontiguousarray(se_, dtype=float).reshape(n)
+        _unbiased_kernel(flat[0], flat[1], ee, flat[2], flat[3], se, u, R)
+        u, R = u.reshape(shape + (d,)), R.reshape(shape + (d, d))
     z = u
     if sensor is not None:
         s = np.asarray(sensor, dtype=float)[..., :d]

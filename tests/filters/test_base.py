@@ -219,3 +219,19 @@ def test_cartesian_state_names_follow_d():
 
     assert Shell(2).state_names == ("x", "y", "vx", "vy")
     assert Shell(3).state_names == ("x", "y", "z", "vx", "vy", "vz")
+
+
+@pytest.mark.parametrize(
+    ("key", "value"),
+    [("sigma_range_m", 1e308), ("sigma_azimuth_deg", 400.0), ("sigma_elevation_deg", 1e200),
+     ("sigma_range_rate_mps", 1e9)],
+)  # fmt: skip
+def test_absurd_sensor_noise_is_an_error_naming_the_key(key, value):
+    """Every method shares the sensor section; a value no sensor has (which overflowed when
+    squared in algorithm R) is refused with the key and the bound, for every method."""
+    from seatrack.config import ConfigError
+    from seatrack.filters import registry
+
+    for name in ("ekf", "robust-spec", "mm-rangerate", "turning"):
+        with pytest.raises(ConfigError, match=f"{key}: must be <="):
+            registry.build(name, {key: value}, d=2, range_rate=True)

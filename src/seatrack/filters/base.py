@@ -360,20 +360,23 @@ class SensorNoise:
     give your sensor's nominal values -- they are all a method needs to work well.
     """
 
+    # upper bounds: physical limits of any sensor (1,000 km, a half turn, 100 km/s), so
+    # that an absurd value is an error naming the key, not an overflow in a method
     sigma_range: float = param(
-        10.0, key="sigma_range_m", unit="m", doc="range noise std", min=0, exclusive_min=True
-    )
+        10.0, key="sigma_range_m", unit="m", doc="range noise std", min=0, exclusive_min=True,
+        max=1e6,
+    )  # fmt: skip
     sigma_azimuth: float = param(
         0.5, key="sigma_azimuth_deg", unit="deg", doc="azimuth noise std", min=0,
-        exclusive_min=True,
+        exclusive_min=True, max=180.0,
     )  # fmt: skip
     sigma_elevation: float = param(
         0.5, key="sigma_elevation_deg", unit="deg", doc="elevation noise std", min=0,
-        exclusive_min=True,
+        exclusive_min=True, max=90.0,
     )  # fmt: skip
     sigma_range_rate: float = param(
         1.0, key="sigma_range_rate_mps", unit="m/s", doc="range-rate noise std", min=0,
-        exclusive_min=True,
+        exclusive_min=True, max=1e5,
     )  # fmt: skip
 
 

@@ -137,3 +137,21 @@ def test_bad_output_paths(tmp_path, case):
     r = run_cli("track", p, "--out", out)
     assert r.code == 2 and r.err.startswith("error: ") and "Traceback" not in r.err
     assert f.read_text() == "x"
+
+
+@pytest.mark.parametrize("method", sorted(METHODS))
+def test_every_numeric_key_at_its_extremes_is_a_result_or_a_clear_error(tmp_path, method):
+    """Each numeric configuration key of the method at 1e308 and 1e-308: exit 0 or a one-line
+    error (2), never an internal error -- squares overflowed and inverse variances underflowed
+    in the initialisers before the keys had physical bounds."""
+    from seatrack.filters.registry import describe_method
+
+    keys = [
+        k
+        for k, default, _, _ in describe_method(method)
+        if isinstance(default, int | float) and not isinstance(default, bool)
+    ]
+    for key in keys:
+        for value in ("1e308", "1e-308"):
+            err = _run(tmp_path, PLOTS.encode(), method, f"{key} = {value}\n".encode())
+            assert "internal error" not in err, (key, value, err)

@@ -388,8 +388,8 @@ def speed_sigma_param(default: float, aliases: Sequence[str] = ()) -> Any:
         key="initial_speed_sigma_mps",
         unit="m/s",
         doc="velocity std of a new track (per axis)",
-        min=0,
-        exclusive_min=True,
+        min=1e-3,  # bounds: below, the inverse variance underflows; above, its square overflows
+        max=1e5,
         aliases=aliases,
     )
 
@@ -404,6 +404,7 @@ def accel_sigma_param(key: str, psd: str) -> Any:
         unit="m/s^2",
         doc=f"acceleration std whose PSD a^2 T is added to {psd} each scan (a target sets it)",
         min=0,
+        max=1e4,  # 1000 g: a larger value is a typo (its square would overflow)
     )
 
 

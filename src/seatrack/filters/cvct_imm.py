@@ -71,8 +71,8 @@ class CVCTIMMConfig:
         key="initial_turn_rate_std_dps",
         unit="deg/s",
         doc="turn-rate std of a new track",
-        min=0,
-        exclusive_min=True,
+        min=1e-6,
+        max=1e4,
     )
     use_range_rate: bool = param(False, doc="stack the range rate with the converted position")
     sigma_accel_cv: float = accel_sigma_param("sigma_accel_cv_mps2", "q_cv")

@@ -76,6 +76,7 @@ from seatrack.models.targets import TargetClass
 FloatArray = NDArray[np.float64]
 
 __all__ = [
+    "sigma_omega0_param",
     "TurnState",
     "TurningConfig",
     "TurningStep",
@@ -107,6 +108,15 @@ class TurnState(IntEnum):
 # ---------------------------------------------------------------------------
 # Configuration
 # ---------------------------------------------------------------------------
+def sigma_omega0_param(doc: str) -> Any:
+    """The ``sigma_omega0_dps`` field: the heading filter's initial turn-rate std (deg/s at
+    the edge, 0.1 rad/s by default; bounded so that its inverse variance and its square stay
+    finite)."""
+    return param(
+        math.degrees(0.1), key="sigma_omega0_dps", unit="deg/s", doc=doc, min=1e-6, max=1e4
+    )
+
+
 @dataclass(frozen=True)
 class TurningConfig:
     """Parameters of the turning-target filter (defaults from ``docs/turning.md``); the
@@ -152,10 +162,7 @@ class TurningConfig:
     sigma_velocity0: float = speed_sigma_param(300.0, aliases=("sigma_velocity0_mps",))
     velocity_threshold: float | None = param(None, doc="S2 threshold on d_t (None: N)", min=0)
     heading_cross_covariance: bool = param(False, doc="S2 heading variance with cross term")
-    sigma_omega0: float = param(
-        math.degrees(0.1), key="sigma_omega0_dps", unit="deg/s",
-        doc="S2 initial turn-rate std", min=0, exclusive_min=True,
-    )  # fmt: skip
+    sigma_omega0: float = sigma_omega0_param("S2 initial turn-rate std")
     q_heading: float = param(
         1e-6, unit="rad^2/s^3", doc="S2 heading-filter PSD", min=0, exclusive_min=True
     )
@@ -178,7 +185,7 @@ class TurningConfig:
     sigma_accel: float | None = param(
         None, key="sigma_accel_mps2", unit="m/s^2",
         doc="nominal noise as an acceleration std, q = a^2 T (set by a target; overrides q)",
-        min=0, exclusive_min=True,
+        min=0, exclusive_min=True, max=1e4,
     )  # fmt: skip
 
     @classmethod

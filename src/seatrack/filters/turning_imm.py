@@ -36,6 +36,7 @@ from seatrack.filters.levels import OutlierConfig
 from seatrack.filters.turning import Turning
 from seatrack.filters.turning import TurningConfig
 from seatrack.filters.turning import heading_columns
+from seatrack.filters.turning import sigma_omega0_param
 from seatrack.models.targets import TargetClass
 
 __all__ = ["TurningLevelsConfig", "TurningLevels"]
@@ -52,10 +53,7 @@ class TurningLevelsConfig(OutlierConfig, LevelConfig):
         1e-4, unit="rad^2/s^3", doc="heading-filter PSD (spec 1e-6 reacts after the turn)",
         min=0, exclusive_min=True,
     )  # fmt: skip
-    sigma_omega0: float = param(
-        math.degrees(0.1), key="sigma_omega0_dps", unit="deg/s",
-        doc="initial turn-rate std of the heading filter", min=0, exclusive_min=True,
-    )  # fmt: skip
+    sigma_omega0: float = sigma_omega0_param("initial turn-rate std of the heading filter")
     turn_rate_threshold: float = param(1.0, doc="S3 threshold on d_omega", min=0)
     queue_length: int = param(5, doc="S3/S4 queue length M (> 3)")
     delta_omega_threshold: float = param(

@@ -146,3 +146,26 @@ def test_simulate_a_multitarget_scenario_gives_unlabelled_plots(tmp_path):
     assert r.returncode == 0, r.stderr
     assert "multi-target (gnn)" in r.stdout
     assert len({x["track"] for x in _rows(tmp_path / "t.csv")}) >= len(targets) // 2
+
+
+def test_tracker_keys_at_their_extremes_are_a_result_or_a_clear_error(tmp_path):
+    """The multi-target tracker's numeric keys at 1e308 and 1e-308: exit 0 or a one-line
+    error (max_speed_kn = 1e-308 made a zero speed variance and a division by zero in the
+    turning filter's initiation before it had bounds)."""
+    from seatrack.config import describe
+    from seatrack.tracking.tracker import TrackerConfig
+
+    _plots_file(tmp_path / "plots.csv")
+    keys = [
+        k
+        for k, default, _, _ in describe(TrackerConfig)
+        if isinstance(default, int | float) and not isinstance(default, bool)
+    ]
+    assert "max_speed_kn" in keys
+    for key in keys:
+        for value in ("1e308", "1e-308"):
+            (tmp_path / "c.toml").write_text(f"{key} = {value}\n")
+            r = _seatrack("track", "plots.csv", "-o", "t.csv", "--method", "turning",
+                          "--config", "c.toml", cwd=tmp_path)  # fmt: skip
+            assert r.returncode in (0, 2), (key, value, r.stderr)
+            assert "internal error" not in r.stderr and "Traceback" not in r.stderr

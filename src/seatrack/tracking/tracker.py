@@ -167,7 +167,7 @@ class TrackerConfig:
     )  # fmt: skip
     max_speed: float = param(
         40.0, key="max_speed_kn", unit="kn", doc="speed gate of two-point initiation",
-        min=0, exclusive_min=True,
+        min=1e-3, max=1e5,  # physical bounds: a new track's speed variance stays finite
     )  # fmt: skip
     association: str = param("gnn", doc="association of the tracks", choices=("gnn", "jpda"))
     clutter_memory: float = param(20.0, unit="scans", doc="memory of the clutter estimate", min=1)

@@ -110,6 +110,19 @@ def polar_jacobian(rng: ArrayLike, az: ArrayLike, el: ArrayLike | None = None) -
     )
 
 
+@njit(cache=True, inline="always")
+def _trig_moments(ang, sigma):  # pragma: no cover - compiled
+    """``lam = exp(-sigma^2 / 2)`` and the moments ``E[sin], E[cos], E[sin^2], E[cos^2],
+    E[sin cos]`` of the true angle given the measured ``ang`` (noise std ``sigma``)."""
+    lam = math.exp(-0.5 * sigma**2)
+    lam4 = lam**4  # exp(-2 sigma^2) = E[cos 2v]
+    c2, s2 = math.cos(2.0 * ang), math.sin(2.0 * ang)
+    return (
+        lam, lam * math.sin(ang), lam * math.cos(ang),
+        0.5 * (1 - lam4 * c2), 0.5 * (1 + lam4 * c2), 0.5 * lam4 * s2,
+    )  # fmt: skip
+
+
 @njit(cache=True)
 def _unbiased_kernel(r, a, e, sr, sa, se, u, R):  # pragma: no cover - compiled
     """Unbiased converted relative positions ``u (N, d)`` and their measurement-conditioned
@@ -124,32 +137,23 @@ def _unbiased_kernel(r, a, e, sr, sa, se, u, R):  # pragma: no cover - compiled
     u u^T`` (the module docstring gives the references). One plot at a time: the
     small batches of one scan pay no NumPy per-call cost."""
     d = u.shape[1]
+    uu = np.empty(3)
+    mu = np.empty(3)
+    M2 = np.empty((3, 3))
     for i in range(r.size):
-        la = math.exp(-0.5 * sa[i] ** 2)
-        la4 = la**4
-        sn, cs = math.sin(a[i]), math.cos(a[i])
-        c2, s2 = math.cos(2.0 * a[i]), math.sin(2.0 * a[i])
-        Esa, Eca = la * sn, la * cs
-        Esa2, Eca2, Esca = 0.5 * (1 - la4 * c2), 0.5 * (1 + la4 * c2), 0.5 * la4 * s2
+        la, Esa, Eca, Esa2, Eca2, Esca = _trig_moments(a[i], sa[i])
         r2 = r[i] ** 2 + sr[i] ** 2
         ri = r[i]
-        uu = np.empty(3)
-        mu = np.empty(3)
-        M2 = np.empty((3, 3))
         if d == 2:
-            uu[0], uu[1] = ri * sn / la, ri * cs / la
+            uu[0], uu[1] = ri * math.sin(a[i]) / la, ri * math.cos(a[i]) / la
             mu[0], mu[1] = ri * Esa, ri * Eca
             M2[0, 0], M2[0, 1], M2[1, 1] = r2 * Esa2, r2 * Esca, r2 * Eca2
         else:
-            le = math.exp(-0.5 * se[i] ** 2)
-            le4 = le**4
-            sne, cse = math.sin(e[i]), math.cos(e[i])
-            c2e, s2e = math.cos(2.0 * e[i]), math.sin(2.0 * e[i])
-            Ese, Ece = le * sne, le * cse
-            Ese2, Ece2, Esce = 0.5 * (1 - le4 * c2e), 0.5 * (1 + le4 * c2e), 0.5 * le4 * s2e
-            uu[0] = ri * cse * sn / (la * le)
-            uu[1] = ri * cse * cs / (la * le)
-            uu[2] = ri * sne / le
+            le, Ese, Ece, Ese2, Ece2, Esce = _trig_moments(e[i], se[i])
+            ce = math.cos(e[i])
+            uu[0] = ri * ce * math.sin(a[i]) / (la * le)
+            uu[1] = ri * ce * math.cos(a[i]) / (la * le)
+            uu[2] = ri * math.sin(e[i]) / le
             mu[0], mu[1], mu[2] = ri * Ece * Esa, ri * Ece * Eca, ri * Ese
             M2[0, 0], M2[0, 1], M2[1, 1] = r2 * Ece2 * Esa2, r2 * Ece2 * Esca, r2 * Ece2 * Eca2
             M2[0, 2], M2[1, 2], M2[2, 2] = r2 * Esce * Esa, r2 * Esce * Eca, r2 * Ese2

@@ -392,21 +392,27 @@ def test_the_usual_level_is_a_time_average():
     assert np.allclose(out2["mu_avg"], (1 - w) * mu1 + w * mu2) and out2["t_avg"][0] == tau
 
 
-def test_along_track_noise_follows_a_weaving_fighter_seen_with_range_rate():
-    """A fighter weaving at 4 g seen by a Doppler radar (0.5 m/s range rate): isotropic
-    levels are chosen by the precise channels along the line of sight, which a quiet level
-    fits, while the lag is across it (docs/defaults.md); with the level noise mostly across
-    the track (the default ``along_track_ratio``) the error after the first, straight
-    minute is >= 5 % lower (4 tuning seeds of the ``weaving`` family: 216 m against 234 m)."""
-    scs = [weaving("fighter", k) for k in range(4)]
+def test_range_rate_no_longer_costs_the_levels_a_weaving_fighter():
+    """A fighter weaving at 4 g seen by a Doppler radar (0.5 m/s range rate), 12 tuning
+    seeds of the ``weaving`` family, position RMSE after the straight first minute. With
+    isotropic levels the range rate makes ``turning`` worse (260 m against 228 m without
+    it): the precise line-of-sight channels pick a level too quiet for the cross-range lag
+    (docs/defaults.md). With the level noise mostly across the track (the default
+    ``along_track_ratio``) the range rate helps (223 m against 226 m) and the error is
+    >= 10 % below the isotropic one."""
+    scs = [weaving("fighter", k) for k in range(12)]
     plots = labelled_runs(scs)
     truth = np.concatenate([s.truth[:, :2] for s in scs])
     late = np.concatenate([s.plots.t >= 60.0 for s in scs])
 
-    def pos_rmse(extra):
+    def pos_rmse(**extra):
         c = registry.run("turning", plots, {**scs[0].sensor_table(), **extra})
         e = np.stack([c["x_m"], c["y_m"]], -1) - truth
         return float(np.sqrt(np.mean(np.sum(e[late] ** 2, -1))))
 
     assert LevelConfig().along_track_ratio < 1.0
-    assert pos_rmse({}) < 0.95 * pos_rmse({"along_track_ratio": 1.0})
+    isotropic = pos_rmse(along_track_ratio=1.0)
+    assert isotropic > 1.1 * pos_rmse(along_track_ratio=1.0, use_range_rate=False)
+    default = pos_rmse()
+    assert default < 0.9 * isotropic
+    assert default < pos_rmse(use_range_rate=False)

@@ -645,11 +645,15 @@ def range_rate_levels(n: int, tuning: bool) -> None:
     los = rel / np.linalg.norm(rel, axis=-1, keepdims=True)
     across = np.stack([los[..., 1], -los[..., 0]], -1)
     weave = scs[0].plots.t >= 60.0
+    from seatrack.filters.levels import LADDER
+    from seatrack.filters.levels import LevelConfig
+
     old = {"q_levels": [1e-4, 1e-2, 1.0, 1e2, 1e4]}
+    ratio = LevelConfig().along_track_ratio
     configs = {
         "isotropic, top 1e4 (before)": {**old, "along_track_ratio": 1.0},
-        "along-track 0.5, top 1e4": old,
-        "default (along-track 0.5, top 5e3)": {},
+        f"along-track {ratio:g}, top 1e4": old,
+        f"default (along-track {ratio:g}, top {LADDER[-1]:g})": {},
     }
     print(f"weave-fighter, turning, {n} {'tuning' if tuning else 'headline'} runs")
     for label, cfg in configs.items():

@@ -34,13 +34,18 @@ a CA EKF (white jerk), Singer EKFs (acceleration time constants 10 and 30 s) and
 (white acceleration and turn-rate random walk), each printed as its best RMSE over the best
 CV q and over ``min(narrow, wide)`` (the ``turning`` target is <= 0.95 of the latter).
 
+``--range-rate-levels`` runs ``turning`` on ``weave-fighter`` with and without the plots'
+range rate, with isotropic levels on the old ladder and with the along-track shape, and
+prints the level probabilities and the errors along / across the line of sight over the
+weave (why range rate hurt the level IMM there: docs/defaults.md).
+
 ``--gross-outliers`` runs the two contaminated sets with their outliers at 10 sigma
 (variance x 100 instead of Ramazanov's x 10 range, x 25 azimuth) through the level-IMM
 methods with their default outlier scale (100) and with Ramazanov's (10, 25).
 
 Run: ``python benchmarks/defaults_experiments.py --runs 20`` (TUNING seeds),
 ``--headline`` (HEADLINE seeds), ``--sets``, ``--consistency`` (multiple-model methods),
-``--model-bounds [--sets ...]``, ``--gross-outliers``.
+``--model-bounds [--sets ...]``, ``--gross-outliers``, ``--range-rate-levels``.
 """
 
 from __future__ import annotations
@@ -606,6 +611,66 @@ def gross_outliers(n: int, tuning: bool) -> None:
                       f"/ mixture-R {pos / mix:.3f}")  # fmt: skip
 
 
+def level_trace(scs: Sequence[Scenario], config: dict[str, Any]) -> tuple[Estimate, np.ndarray]:
+    """``turning`` from the registry driven scan by scan over the runs of a set (one batch):
+    the combined estimates ``(B, N, 4)`` and the level probabilities ``(B, N, M)``."""
+    from defaults import nominal_config
+    from seatrack.filters.registry import build
+    from seatrack.simulate.families import labelled_runs
+
+    plots = labelled_runs(scs)
+    method = build("turning", {**nominal_config(scs[0]), **config}, range_rate=True)
+    flt = method.filter
+    B, N = len(scs), len(scs[0].plots)
+    first = plots.take(np.arange(B) * N)
+    state = flt.initiate(first.t, *method.initiate(first))
+    est, mu = np.empty((B, N, 4)), np.empty((B, N, flt.M))
+    est[:, 0], mu[:, 0] = state.x, state.aux["mu"]
+    for k in range(1, N):
+        pk = plots.take(np.arange(B) * N + k)
+        state = flt.update(flt.predict(state, pk.t), pk)
+        est[:, k], mu[:, k] = state.x, state.aux["mu"]
+    return est, mu
+
+
+def range_rate_levels(n: int, tuning: bool) -> None:
+    """Why range rate hurt the level IMM on ``weave-fighter`` (docs/defaults.md): ``turning``
+    with and without the plots' range rate, isotropic levels on the old ladder (top rung
+    1e4) against the along-track shape and the default ladder; position RMSE (after the
+    transient), and over the weave (after the straight first minute) the mean level
+    probabilities and the RMS errors along / across the line of sight."""
+    scs = [SETS["weave-fighter"].make(k) for k in seeds(n, tuning)]
+    truth = np.stack([s.truth for s in scs])
+    rel = truth[..., :2] - np.stack([s.plots.sensor[:, :2] for s in scs])
+    los = rel / np.linalg.norm(rel, axis=-1, keepdims=True)
+    across = np.stack([los[..., 1], -los[..., 0]], -1)
+    weave = scs[0].plots.t >= 60.0
+    from seatrack.filters.levels import LADDER
+    from seatrack.filters.levels import LevelConfig
+
+    old = {"q_levels": [1e-4, 1e-2, 1.0, 1e2, 1e4]}
+    ratio = LevelConfig().along_track_ratio
+    configs = {
+        "isotropic, top 1e4 (before)": {**old, "along_track_ratio": 1.0},
+        f"along-track {ratio:g}, top 1e4": old,
+        f"default (along-track {ratio:g}, top {LADDER[-1]:g})": {},
+    }
+    print(f"weave-fighter, turning, {n} {'tuning' if tuning else 'headline'} runs")
+    for label, cfg in configs.items():
+        for rr in (True, False):
+            est, mu = level_trace(scs, {**cfg, "use_range_rate": rr})
+            e = est - truth
+
+            def rms(u: np.ndarray, sl: slice) -> float:
+                return float(np.sqrt(np.mean(np.sum(e[..., sl] * u, -1)[:, weave] ** 2)))
+
+            probs = " ".join(f"{v:.2f}" for v in mu[:, weave].mean((0, 1)))
+            print(f"  {label:36s} rr {'yes' if rr else 'no ':3s} pos {rmse(est, scs)[0]:6.1f} m | "
+                  f"weave: levels {probs} | pos along / across LOS {rms(los, slice(0, 2)):5.1f} / "
+                  f"{rms(across, slice(0, 2)):5.1f} m, vel {rms(los, slice(2, 4)):5.1f} / "
+                  f"{rms(across, slice(2, 4)):5.1f} m/s")  # fmt: skip
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     from seatrack.models.targets import target_class
 
@@ -617,7 +682,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap.add_argument("--consistency", action="store_true", help="multiple-model consistency")
     ap.add_argument("--model-bounds", action="store_true", help="hindsight single models")
     ap.add_argument("--gross-outliers", action="store_true", help="10-sigma outliers")
+    ap.add_argument("--range-rate-levels", action="store_true", help="rr and the levels")
     a = ap.parse_args(argv)
+    if a.range_rate_levels:
+        range_rate_levels(a.runs, not a.headline)
+        return
     if a.gross_outliers:
         gross_outliers(a.runs, not a.headline)
         return

@@ -40,6 +40,7 @@ from seatrack.filters.robust_baselines import HuberConfig
 from seatrack.filters.robust_baselines import StudentTConfig
 from seatrack.filters.robust_baselines import reweighted_update
 from seatrack.models.measurement import polar_measurement
+from seatrack.models.motion import along_track_shape
 from seatrack.models.motion import cv_matrices
 
 SENSOR = SensorNoise(15.0, math.radians(0.4), sigma_elevation=math.radians(0.4),
@@ -135,7 +136,7 @@ def _reference_update(f: Any, st: Any, plots: Plots) -> dict[str, Any]:
 
 _CASES = [
     (LevelIMM, LevelIMMConfig(), 2, False),
-    (LevelIMM, LevelIMMConfig(outlier_probability=0.0), 3, False),
+    (LevelIMM, LevelIMMConfig(outlier_probability=0.0, along_track_ratio=1.0), 3, False),
     (LevelIMM, LevelIMMConfig(use_range_rate=True), 3, True),
     (ContaminatedLevels, ContaminatedConfig(), 2, True),
     (ContaminatedLevels, ContaminatedConfig(accel_levels=(0.1, 5.0), sojourn_times=(60.0, 10.0)),
@@ -176,8 +177,11 @@ def test_predict_matches_the_numpy_composition(cls, cfg, d, rr):
         dt = t - st.t
         q, PI = level_noise(f.config, dt)
         X0, P0, c = mix(IMMState(a["X"], a["PP"], a["mu"]), PI, np.ones((f.M, 2 * d)))
-        F, Q1 = cv_matrices(dt, 1.0, d)
-        F, Q1 = (F[:, None], Q1[:, None]) if F.ndim == 3 else (F, Q1)
+        F, _ = cv_matrices(dt, 1.0, d)
+        F = F[:, None] if F.ndim == 3 else F
+        shape = along_track_shape(st.x[:, d:], st.P[:, d:, d:], f.config.along_track_ratio)
+        blk = np.stack([np.stack([dt**3 / 3, dt**2 / 2], -1), np.stack([dt**2 / 2, dt], -1)], -2)
+        Q1 = np.stack([np.kron(g, a) for g, a in zip(blk, shape)])[:, None]  # per track
         X, PP = kalman.predict(X0, P0, F, q[:, :, None, None] * Q1)
         _, x, P, _ = combine(X, PP, c, np.zeros_like(c), np.arange(2 * d))
         new = f.predict(st, t)

@@ -104,7 +104,7 @@ def test_target_sets_the_class_values_and_keys_beside_it_win():
 def test_without_a_target_the_level_methods_tune_themselves():
     for name in ("turning", "robust", "robust-adaptive", "huber", "student-t", "mm"):
         c = registry.build(name, {}).filter.config
-        assert c.accel_levels == () and c.q_levels == (1e-4, 1e-2, 1.0, 1e2, 1e4), name
+        assert c.accel_levels == () and c.q_levels == (1e-4, 1e-2, 1.0, 1e2, 5e3), name
 
 
 # ---------------------------------------------------------------------------

@@ -5,6 +5,7 @@ from seatrack.models import ConstantAcceleration
 from seatrack.models import ConstantVelocity
 from seatrack.models import CoordinatedTurn
 from seatrack.models import numerical_jacobian
+from seatrack.models.motion import along_track_shape
 from seatrack.models.motion import ca_transition
 from seatrack.models.motion import ct_jacobian
 from seatrack.models.motion import ct_noise
@@ -32,6 +33,22 @@ def test_cv_noise_blocks_and_pd():
     Qd = cv_noise_discrete(2.0, 1.5, d=2)
     np.testing.assert_allclose(Qd[0, 0], 1.5**2 * 4.0)
     np.testing.assert_allclose(Qd[0, 2], 1.5**2 * (4.0 / 2) * 2.0)
+
+
+def test_along_track_shape_scales_the_noise_along_the_velocity():
+    """``A = I - (1 - ratio) u u^T``: PSD ``ratio`` along ``v``, 1 across it, for each track
+    of a batch, 2-D and 3-D; an unknown direction (speed below 3 sigma) keeps ``A = I``."""
+    v = np.array([[30.0, 40.0], [0.5, 0.0], [0.0, 0.0]])
+    Pv = np.broadcast_to(np.eye(2), (3, 2, 2))
+    A = along_track_shape(v, Pv, 0.3)
+    u, n = np.array([0.6, 0.8]), np.array([0.8, -0.6])
+    np.testing.assert_allclose([u @ A[0] @ u, n @ A[0] @ n, u @ A[0] @ n], [0.3, 1.0, 0.0],
+                               atol=1e-15)  # fmt: skip
+    np.testing.assert_array_equal(A[1:], np.broadcast_to(np.eye(2), (2, 2, 2)))
+    assert np.all(np.linalg.eigvalsh(A[0]) > 0)
+    A3 = along_track_shape(np.array([0.0, 0.0, 200.0]), 4.0 * np.eye(3), 0.1)
+    np.testing.assert_allclose(A3, np.diag([1.0, 1.0, 0.1]), atol=1e-15)
+    np.testing.assert_array_equal(along_track_shape(v, Pv, 1.0), Pv)  # ratio 1: isotropic
 
 
 def test_transitions_batch_over_dt():

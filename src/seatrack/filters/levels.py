@@ -5,13 +5,19 @@ The engine under the default ``turning``, ``robust``, ``robust-adaptive``, ``hub
 the same constant-velocity EKF (state ``[x, y, (z), vx, vy, (vz)]``, polar update with a
 wrapped azimuth innovation) with different white-noise acceleration PSDs ``q_j``:
 
-* **self-tuning ladder** (no target class): ``q = (1e-4, 1e-2, 1, 1e2, 1e4)`` m^2/s^3 with
-  ``p_stay = exp(-T / 200 s)`` for every level -- eight decades of manoeuvrability, the
+* **self-tuning ladder** (no target class): ``q = (1e-4, 1e-2, 1, 1e2, 5e3)`` m^2/s^3 with
+  ``p_stay = exp(-T / 200 s)`` for every level -- almost eight decades of manoeuvrability, the
   model probabilities pick the level the innovations support, scan by scan;
 * **target class** (``target = "ship"`` ...): two levels ``q = (a_steady^2 T, a_max^2 T)``
   (straight legs and the hardest manoeuvre of the class, :mod:`seatrack.models.targets`)
   with ``p_stay_j = exp(-T / tau_j)``, ``tau`` = the class's straight-leg and manoeuvre
   times.
+
+Each level's white acceleration is shaped along / across the track: PSD ``q_j`` across
+the velocity of the track's estimate and ``along_track_ratio * q_j`` (0.3) along it
+(:func:`seatrack.models.motion.along_track_shape`; isotropic while the direction is
+unknown) -- manoeuvres are mostly turns, and isotropic levels let the precise
+line-of-sight channels (range, range rate) pick a level too quiet for the cross-range lag.
 
 The turn decision of a turning filter, or the adaptation of algorithm A, becomes a mode
 probability; each level keeps its own state (a single state whose ``q`` is mixed by the
@@ -112,8 +118,13 @@ __all__ = [
 #: the range a learnt channel outlier probability is kept in
 _EPS_RANGE = (1e-3, 0.4)
 
-#: the self-tuning ladder of process-noise PSDs, m^2/s^3 (no target class given)
-LADDER = (1e-4, 1e-2, 1.0, 1e2, 1e4)
+#: the self-tuning ladder of process-noise PSDs, m^2/s^3 (no target class given). The top
+#: rung was 1e4: with the along-track shape (ratio 0.3), 5e3 (about 5 g at 2 s scans) cut
+#: the position RMSE of the level methods on the tuning seeds of the nine sets of
+#: ``benchmarks/defaults.py`` by up to 8.3 % (fighters; weave-fighter's best fixed q is 3e3)
+#: and cost at most 0.2 %; 3e3 cost up to 4.6 %, and (ratio 0.5) a sixth rung at 1e3 or a
+#: top pair (3e3, 3e4) up to 13 % and 1.8 % (docs/defaults.md)
+LADDER = (1e-4, 1e-2, 1.0, 1e2, 5e3)
 
 
 # ---------------------------------------------------------------------------
@@ -134,6 +145,19 @@ class LevelConfig:
     0.68-0.94, of ``robust`` / ``huber`` / ``student-t`` on the clean ship sets from
     1.0-1.1 to 0.91-0.95, at a cost of 1-4 % on the aircraft and fighter sets
     (docs/defaults.md).
+
+    ``along_track_ratio`` = 0.3: each level's white acceleration has PSD ``q_j`` across the
+    track and ``0.3 q_j`` along it (:func:`seatrack.models.motion.along_track_shape`, the
+    direction of the track's combined velocity estimate; isotropic while the speed is
+    below 3 sigma). Isotropic levels are chosen by the channels that see the motion along
+    the line of sight -- range and, precisely, range rate -- while a turning target's lag
+    is across it, where the azimuth is coarse: on ``weave-fighter`` the range rate moved
+    ``turning`` to the ``1e2`` level (mean probability 0.25 -> 0.62) and its cross-range
+    error from 230 to 279 m (``benchmarks/defaults_experiments.py --range-rate-levels``).
+    Chosen with the ladder's top rung on the tuning seeds (12 runs, nine sets, six
+    methods; ratios 1, 0.5, 0.3, 0.2, 0.1): with the top rung 5e3, 0.3 gained 0.5-2.4 %
+    over 0.5 and cost at most 1.0 % (``weave-aircraft``), 0.2 up to 2.8 %; against the
+    isotropic engine every row is within +0.8 % and up to 30 % better (docs/defaults.md).
     """
 
     q_levels: tuple[float, ...] = param(
@@ -152,6 +176,10 @@ class LevelConfig:
     sojourn_times: tuple[float, ...] = param(
         (), unit="s", doc="mean time in each level, p_stay = exp(-T/tau) (set by a target)"
     )
+    along_track_ratio: float = param(
+        0.3, doc="PSD of the level noise along the velocity / across it (1: isotropic)",
+        min=0, max=1, exclusive_min=True,
+    )  # fmt: skip
     initial_speed_sigma: float = speed_sigma_param(300.0)
 
     def __post_init__(self) -> None:
@@ -168,6 +196,8 @@ class LevelConfig:
             )
         if len(levels) > 1 and not self.p_stay < 1 and not self.sojourn_times:
             raise ValueError("p_stay must be < 1 with more than one level")
+        if not 0 < self.along_track_ratio <= 1:
+            raise ValueError(f"along_track_ratio: expected (0, 1], got {self.along_track_ratio}")
         if not (math.isfinite(self.sojourn_time) and self.sojourn_time > 0):
             raise ValueError(f"sojourn_time: expected seconds > 0, got {self.sojourn_time}")
 
@@ -449,7 +479,8 @@ class LevelIMM(ConfiguredFilter, CartesianState):
         c, x, P = np.empty_like(a["mu"]), np.empty((B, n)), np.empty((B, n, n))
         level_predict_core(
             a["X"], a["PP"], a["mu"], PI, q, F.reshape(-1, n, n), Q1.reshape(-1, n, n),
-            X, PP, c, x, P,
+            np.ascontiguousarray(state.x), np.ascontiguousarray(state.P),
+            float(self.config.along_track_ratio), X, PP, c, x, P,
         )  # fmt: skip
         q = np.broadcast_to(q, c.shape) if q.shape != c.shape else q
         out = predicted(state, tt, x, P, {"X": X, "PP": PP, "mu": c, "q": q})

@@ -39,6 +39,7 @@ from seatrack.kalman import matmul_core
 from seatrack.kalman import predict_core
 from seatrack.kalman import wrap_angle
 from seatrack.models.measurement import polar_core
+from seatrack.models.motion import along_track_core
 
 __all__ = [
     "Rule",
@@ -184,17 +185,24 @@ def mixture_core(P, y, H, r, G, logp, k, dx, Po, ll, pout, tn, tm):  # pragma: n
 
 
 @njit(cache=True)
-def level_predict_core(X, PP, mu, PI, q, F, Q1, Xo, PPo, c, x, P):  # pragma: no cover
+def level_predict_core(
+    X, PP, mu, PI, q, F, Q1, xp, Pp, ratio, Xo, PPo, c, x, P
+):  # pragma: no cover - compiled  # fmt: skip
     """Mixing, prediction and combination of level states ``X (B, M, n)``, ``PP`` with
     probabilities ``mu (B, M)``, transitions ``PI (B', M, M)``, PSDs ``q (B', M)`` and the
     unit-PSD CV pair ``F``, ``Q1 (B', n, n)`` (``B'`` is 1 or ``B``: a regular scan shares
-    one). Writes the predicted levels ``Xo``, ``PPo``, probabilities ``c`` and the combined
-    ``x``, ``P``."""
+    one). With ``ratio`` < 1 each track's white acceleration is shaped along / across the
+    velocity of its combined estimate ``xp (B, n)``, ``Pp (B, n, n)``
+    (:func:`seatrack.models.motion.along_track_core`): ``Q = q blk (x) A`` where
+    ``Q1 = blk (x) I``. Writes the predicted levels ``Xo``, ``PPo``, probabilities ``c``
+    and the combined ``x``, ``P``."""
     B, M, n = X.shape
+    d = n // 2
     valid = np.ones((M, n))
     X0 = np.empty((M, n))
     P0 = np.empty((M, n, n))
     Q = np.empty((n, n))
+    A = np.eye(d)
     zero = np.zeros(M)
     mu_c = np.empty(M)
     out = np.arange(n) * 1.0
@@ -203,10 +211,13 @@ def level_predict_core(X, PP, mu, PI, q, F, Q1, Xo, PPo, c, x, P):  # pragma: no
         bq = b if q.shape[0] > 1 else 0
         bf = b if F.shape[0] > 1 else 0
         mix_core(X[b], PP[b], mu[b], PI[bi], valid, X0, P0, c[b])
+        if ratio < 1.0:
+            along_track_core(xp[b, d:], Pp[b, d:, d:], ratio, A)
         for j in range(M):
             for a in range(n):
                 for e in range(n):
-                    Q[a, e] = q[bq, j] * Q1[bf, a, e]
+                    blk = Q1[bf, (a // d) * d, (e // d) * d]
+                    Q[a, e] = q[bq, j] * (blk * A[a % d, e % d])
             predict_core(X0[j], P0[j], F[bf], Q, Xo[b, j], PPo[b, j])
         combine_core(Xo[b], PPo[b], c[b], zero, out, mu_c, x[b], P[b])
 

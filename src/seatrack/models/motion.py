@@ -46,6 +46,8 @@ __all__ = [
     "cv_noise",
     "cv_matrices",
     "cv_noise_discrete",
+    "along_track_core",
+    "along_track_shape",
     "ca_transition",
     "ca_noise",
     "ct_transition",
@@ -95,6 +97,49 @@ def cv_noise(dt: ArrayLike, q: ArrayLike, d: int = 2) -> FloatArray:
         * qq[..., None, None]
     )
     return _kron_blocks(blk, d)
+
+
+#: the speed, in velocity standard deviations, above which a track's direction is known
+ALONG_TRACK_MIN_SIGMAS = 3.0
+
+
+@njit(cache=True)
+def along_track_core(v, Pv, ratio, A):  # pragma: no cover - compiled
+    """Write into ``A (d, d)`` the covariance shape of a white acceleration whose PSD
+    along the velocity ``v (d,)`` (m/s) is ``ratio`` times its PSD across it:
+    ``A = I - (1 - ratio) u u^T``, ``u = v / |v|``. Where the direction is unknown -- the
+    speed at most :data:`ALONG_TRACK_MIN_SIGMAS` times the velocity std
+    ``sqrt(tr(Pv) / d)`` of the covariance ``Pv (d, d)`` (m^2/s^2) -- ``A = I``."""
+    d = v.shape[0]
+    s2 = 0.0
+    tr = 0.0
+    for k in range(d):
+        s2 += v[k] * v[k]
+        tr += Pv[k, k]
+    known = s2 > ALONG_TRACK_MIN_SIGMAS**2 * max(tr, 0.0) / d and s2 > 0.0
+    w = (1.0 - ratio) / s2 if known else 0.0
+    for k in range(d):
+        for m in range(d):
+            A[k, m] = (1.0 if k == m else 0.0) - w * v[k] * v[m]
+
+
+def along_track_shape(v: ArrayLike, Pv: ArrayLike, ratio: float) -> FloatArray:
+    """Covariance shapes ``(..., d, d)`` of a manoeuvre acceleration whose PSD along the
+    velocity is ``ratio`` (in (0, 1]) times its PSD across it (:func:`along_track_core`
+    per track: a coordinated turn accelerates across the track; ``A = I`` while the
+    direction is unknown). The white-acceleration CV noise of such a level is
+    ``q [[T^3/3, T^2/2], [T^2/2, T]] (x) A`` (BLK 6.2.2 with ``I`` replaced by ``A``).
+
+    Parameters
+    ----------
+    v : (..., d) velocity estimates, m/s; Pv : (..., d, d) their covariances, m^2/s^2.
+    """
+    vv = np.asarray(v, dtype=float)
+    PP = np.broadcast_to(np.asarray(Pv, dtype=float), vv.shape + vv.shape[-1:])
+    out = np.empty(vv.shape + vv.shape[-1:])
+    for i in np.ndindex(vv.shape[:-1]):
+        along_track_core(vv[i], np.ascontiguousarray(PP[i]), float(ratio), out[i])
+    return out
 
 
 @lru_cache(maxsize=256)

@@ -62,13 +62,13 @@ P_SWITCH = 0.01
 AUTO_NOISE: dict[str, str] = {
     "ekf": "levels",  # 180.9 / 182.6 / 154.6 (its default q = 1 suits no target class)
     "ekf-rb": "wrap",  # 177.8 / 153.9: its sonar q (0.02 m/s^2) needs the manoeuvre level
-    "huber": "own",  # 158.7 / 158.7: a level IMM already (wrap is void)
-    "student-t": "own",  # 160.4 / 160.4: idem
-    "robust": "own",  # 158.7 / 158.7: idem
-    "robust-adaptive": "own",  # 158.1 / 158.1: idem
-    "turning": "own",  # 157.8 / 157.8: idem
+    "huber": "own",  # 157.6 / 157.6: a level IMM already (wrap is void)
+    "student-t": "own",  # 159.7 / 159.7: idem
+    "robust": "own",  # 157.3 / 157.3: idem
+    "robust-adaptive": "own",  # 156.4 / 156.4: idem
+    "turning": "own",  # 156.1 / 156.1: idem
     "imm": "own",  # 184.2 / 184.2: its update starts from its model states (wrap is void)
-    "mm": "own",  # 157.8 / 157.8: a level IMM already
+    "mm": "own",  # 156.1 / 156.1: a level IMM already
     "mm-rangerate": "own",  # as mm (needs range rate: not in the tuning scenarios)
     # the sources' methods run as their sources describe, process noise included
     "turning-spec": "own",  # 173.2 / 175.2

@@ -14,6 +14,7 @@ from ais_samples import FILES
 from ais_samples import data_file
 from seatrack.evaluate.holdout import ais_holdout
 from seatrack.filters.ais import AisTrackerConfig
+from seatrack.filters.ais import OffsetInputs
 from seatrack.filters.ais import ct_step
 from seatrack.filters.ais import position_noise
 from seatrack.filters.ais import sogcog_model
@@ -586,20 +587,28 @@ def test_timestamp_offsets_score_against_an_exact_track() -> None:
     n = s["d"].size
     zero_cov = np.zeros((n, 2, 2))
     use = np.ones(n, bool)
-    got = timestamp_offsets(s["z"], s["state"], zero_cov, s["sig"], np.zeros(n), use, CFG)
+    got = timestamp_offsets(
+        OffsetInputs(s["z"], s["state"], s["sig"], np.zeros(n), use), zero_cov, CFG
+    )
     assert np.mean(got == s["d"]) > 0.99
     # against a track made with the true offsets already applied: the same answer
     z_shift = s["z"]
-    got2 = timestamp_offsets(z_shift, s["state"], zero_cov, s["sig"], s["d"], use, CFG)
+    got2 = timestamp_offsets(
+        OffsetInputs(z_shift, s["state"], s["sig"], s["d"], use), zero_cov, CFG
+    )
     assert np.array_equal(got, got2)
     # unusable rows and rows without a state are 0
     state = s["state"].copy()
     state[:10] = np.nan
     use[10:20] = False
-    got = timestamp_offsets(s["z"], state, zero_cov, s["sig"], np.zeros(n), use, CFG)
+    holes = OffsetInputs(s["z"], state, s["sig"], np.zeros(n), use)
+    got = timestamp_offsets(holes, zero_cov, CFG)
     assert np.all(got[:20] == 0.0)
     off = AisTrackerConfig(max_time_offset_s=0)
-    assert np.all(timestamp_offsets(s["z"], state, zero_cov, s["sig"], np.zeros(n), use, off) == 0)
+    assert np.all(
+        timestamp_offsets(OffsetInputs(s["z"], state, s["sig"], np.zeros(n), use), zero_cov, off)
+        == 0
+    )
 
 
 def test_timestamp_offsets_leave_one_out_undoes_the_pull_of_the_report() -> None:
@@ -620,8 +629,9 @@ def test_timestamp_offsets_leave_one_out_undoes_the_pull_of_the_report() -> None
     sig = np.c_[np.full(n, sp), np.full(n, st)]
     state = np.c_[s["z"] - r, v, np.zeros(n)]  # the smoothed track
     use = np.ones(n, bool)
-    loo = timestamp_offsets(s["z"], state, A, sig, np.zeros(n), use, CFG)
-    shrunk = timestamp_offsets(s["z"], state, A, sig, np.zeros(n), use, CFG, leave_one_out=False)
+    inputs = OffsetInputs(s["z"], state, sig, np.zeros(n), use)
+    loo = timestamp_offsets(inputs, A, CFG)
+    shrunk = timestamp_offsets(inputs, A, CFG, leave_one_out=False)
     print(
         f"right: leave-one-out {np.mean(loo == s['d']):.3f}, "
         f"smoothed {np.mean(shrunk == s['d']):.3f}"

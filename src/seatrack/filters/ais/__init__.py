@@ -96,6 +96,7 @@ from seatrack.filters.ais.kernel import Force
 from seatrack.filters.ais.kernel import KernelOutputs
 from seatrack.filters.ais.kernel import OutlierKind
 from seatrack.filters.ais.noise import position_noise
+from seatrack.filters.ais.offsets import OffsetInputs
 from seatrack.filters.ais.offsets import timestamp_offsets
 from seatrack.filters.ais.plausibility import neighbour_plausibility
 from seatrack.filters.ais.tracker import TrackStates
@@ -116,6 +117,7 @@ __all__ = [
     "position_noise",
     "sogcog_model",
     "timestamp_offsets",
+    "OffsetInputs",
     "track_reports",
     "track_vessels",
 ]

@@ -18,6 +18,7 @@ FloatArray = NDArray[np.float64]
 
 __all__ = [
     "MIN_OFFSET_REPORTS",
+    "OffsetInputs",
     "OffsetScores",
     "apply_offsets",
     "estimate_prior",
@@ -120,13 +121,25 @@ def _score_rows(
         ident[k] = vx * vx + vy * vy > 9.0 * (sp * sp)
 
 
+class OffsetInputs(NamedTuple):
+    """The reports and the smoothed track that the offsets are scored against (``N`` rows,
+    one vessel's or many vessels'):
+
+    ``xy`` (N, 2) reported positions (m); ``state`` (N, >= 4) smoothed states at the logged
+    times (m, m/s; NaN = none); ``sig`` (N, 2) report noise ``(sigma_pos m, sigma_time s)``
+    of the run that made the track (:func:`position_noise`); ``used_offset`` (N,) offsets
+    (s) of that run; ``usable`` (N,) bool, the reports to score (used by that run)."""
+
+    xy: FloatArray
+    state: FloatArray
+    sig: FloatArray
+    used_offset: FloatArray
+    usable: NDArray[np.bool_]
+
+
 def timestamp_offsets(
-    xy: FloatArray,
-    state: FloatArray,
+    inputs: OffsetInputs,
     pos_cov: FloatArray,
-    sig: FloatArray,
-    used_offset: FloatArray,
-    usable: NDArray[np.bool_],
     config: AisTrackerConfig,
     leave_one_out: bool = True,
 ) -> FloatArray:
@@ -165,11 +178,9 @@ def timestamp_offsets(
 
     Parameters
     ----------
-    xy : (N, 2) reported positions (m); state : (N, >= 4) smoothed states at the logged
-    times (m, m/s; NaN = none); pos_cov : (N, 2, 2) their position covariance (m^2);
-    sig : (N, 2) report noise ``(sigma_pos m, sigma_time s)`` of that run
-    (:func:`position_noise`); used_offset : (N,) offsets (s) of that run;
-    usable : (N,) bool, reports to score (used by that run); leave_one_out : bool.
+    inputs : the reports and the smoothed track (:class:`OffsetInputs`).
+    pos_cov : (N, 2, 2) the position covariance of the smoothed states (m^2).
+    config : the tracker's configuration; leave_one_out : bool.
 
     Returns
     -------
@@ -184,7 +195,7 @@ def timestamp_offsets(
     :func:`estimate_prior` with a function summing :func:`prior_counts` over the groups,
     :func:`apply_offsets` per group.
     """
-    scores = offset_scores(xy, state, pos_cov, sig, used_offset, usable, config, leave_one_out)
+    scores = offset_scores(inputs, pos_cov, config, leave_one_out)
     prior = estimate_prior(
         lambda p: prior_counts(scores, p), int(np.count_nonzero(scores.ident)), config
     )
@@ -203,27 +214,19 @@ class OffsetScores(NamedTuple):
 
 
 def offset_scores(
-    xy: FloatArray,
-    state: FloatArray,
+    inputs: OffsetInputs,
     pos_cov: FloatArray,
-    sig: FloatArray,
-    used_offset: FloatArray,
-    usable: NDArray[np.bool_],
     config: AisTrackerConfig,
     leave_one_out: bool = True,
 ) -> OffsetScores:
     """The scores of :func:`timestamp_offsets` (same parameters) before the prior."""
     cov = (pos_cov[:, 0, 0], pos_cov[:, 0, 1], pos_cov[:, 1, 0], pos_cov[:, 1, 1])
-    return _scores(xy, state, cov, False, sig, used_offset, usable, config, leave_one_out)
+    return _scores(inputs, cov, False, config, leave_one_out)
 
 
 def std_offset_scores(
-    xy: FloatArray,
-    state: FloatArray,
+    inputs: OffsetInputs,
     std: FloatArray,
-    sig: FloatArray,
-    used_offset: FloatArray,
-    usable: NDArray[np.bool_],
     config: AisTrackerConfig,
     leave_one_out: bool = True,
 ) -> OffsetScores:
@@ -231,20 +234,17 @@ def std_offset_scores(
     ``(N, 6)`` (sigma x, sigma y in the first two columns, the x-y covariance in the
     last), without building the ``(N, 2, 2)`` array."""
     cov = (std[:, 0], std[:, NX], std[:, NX], std[:, 1])
-    return _scores(xy, state, cov, True, sig, used_offset, usable, config, leave_one_out)
+    return _scores(inputs, cov, True, config, leave_one_out)
 
 
 def _scores(
-    xy: FloatArray,
-    state: FloatArray,
+    inputs: OffsetInputs,
     cov: tuple[FloatArray, ...],
     squared: bool,
-    sig: FloatArray,
-    used_offset: FloatArray,
-    usable: NDArray[np.bool_],
     config: AisTrackerConfig,
     leave_one_out: bool,
 ) -> OffsetScores:
+    xy, state, sig, used_offset, usable = inputs
     k_max = max(int(config.max_time_offset_s), 0)
     n = xy.shape[0]
     c = np.ascontiguousarray

@@ -29,6 +29,7 @@ from seatrack.filters.ais.kernel import run_kernel
 from seatrack.filters.ais.kernel import take_rows
 from seatrack.filters.ais.kernel import vessel_index
 from seatrack.filters.ais.noise import position_noise
+from seatrack.filters.ais.offsets import OffsetInputs
 from seatrack.filters.ais.offsets import OffsetScores
 from seatrack.filters.ais.offsets import apply_offsets
 from seatrack.filters.ais.offsets import estimate_prior
@@ -92,16 +93,8 @@ class Refinement:
         self.sig_f: FloatArray | None = None
         self.off: FloatArray | None = None
         # first estimate from the (manoeuvring, coarse-noise) track: the smoothed residual
-        self.current = std_offset_scores(
-            rows.z,
-            out.state,
-            out.std,
-            rows.sig,
-            np.zeros(rows.t.size),
-            self.usable,
-            cfg,
-            leave_one_out=False,
-        )
+        first = OffsetInputs(rows.z, out.state, rows.sig, np.zeros(rows.t.size), self.usable)
+        self.current = std_offset_scores(first, out.std, cfg, leave_one_out=False)
 
     def __getattr__(self, name: str) -> Any:
         """A part of :attr:`PARTS` held elsewhere: a runner that keeps the parts of many
@@ -152,9 +145,8 @@ class Refinement:
         """Leave-one-out offset scores from the steady track."""
         alt = self.alt
         assert alt is not None and self.sig_f is not None and self.off is not None
-        return std_offset_scores(
-            self.rows.z, alt.state, alt.std, self.sig_f, self.off, self.usable, self.cfg
-        )
+        inputs = OffsetInputs(self.rows.z, alt.state, self.sig_f, self.off, self.usable)
+        return std_offset_scores(inputs, alt.std, self.cfg)
 
     def seed(self, prior: FloatArray | None) -> None:
         """Steps 1-3: seed offsets under ``prior``, noise, the steady track and its

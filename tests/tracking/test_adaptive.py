@@ -118,3 +118,30 @@ def test_extra_noise_per_track_interval():
     a = imm.predict(s, np.array([2.0, 5.0]))  # different intervals per track
     b = imm.predict(s.take([1]), np.array([5.0]))
     assert np.allclose(a.x[1], b.x[0]) and np.allclose(a.P[1], b.P[0])
+
+
+def test_along_track_extra_noise_is_shaped_by_the_velocity():
+    """With ``along_track_ratio`` r the extra noise of a level is ``extra * blk (x) A``:
+    across a known velocity the isotropic PSD, along it r times it; isotropic while the
+    velocity is unknown; r = 1 is the isotropic IMM."""
+    from seatrack.models.motion import cv_noise
+
+    base = EKF(EKFConfig(q=0.0), SN)
+    shaped = NoiseLevels(base, (0.0, 2.0), 0.05, along_track_ratio=0.3)
+    iso = NoiseLevels(base, (0.0, 2.0), 0.05)
+    x = np.array([[0.0, 0.0, 8.0, 0.0], [0.0, 0.0, 0.1, 0.0]])  # East at 8 m/s; ~at rest
+    P = np.broadcast_to(np.diag([100.0, 100.0, 1.0, 1.0]), (2, 4, 4)).copy()
+    outer = TrackState.new(np.zeros(2), x, P)
+    zero = np.zeros((4, 4, 4))  # B * M = 2 tracks x 2 levels
+    dt = np.full(4, 2.0)
+    Qs = shaped._extra_noise(zero, dt, 2, outer)
+    Qi = iso._extra_noise(zero, dt, 2, outer)
+    np.testing.assert_allclose(Qi[1], cv_noise(2.0, 2.0, 2))
+    np.testing.assert_allclose(Qs[0], 0.0)  # the first level has no extra noise
+    # track 0 (level 1): along x (East) 0.3 x, across (North) as the isotropic level
+    np.testing.assert_allclose(Qs[1][np.ix_([0, 2], [0, 2])], 0.3 * Qi[1][np.ix_([0, 2], [0, 2])])
+    np.testing.assert_allclose(Qs[1][np.ix_([1, 3], [1, 3])], Qi[1][np.ix_([1, 3], [1, 3])])
+    # track 1: speed 0.1 m/s with a 1 m/s std -- direction unknown, isotropic
+    np.testing.assert_allclose(Qs[3], Qi[3])
+    with pytest.raises(ValueError, match="along_track_ratio"):
+        NoiseLevels(base, (0.0, 1.0), 0.05, along_track_ratio=0.0)

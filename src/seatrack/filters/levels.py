@@ -89,6 +89,7 @@ from seatrack.filters.levels_kernel import level_predict_core
 from seatrack.filters.levels_kernel import level_update_core
 from seatrack.filters.levels_kernel import mixture_core
 from seatrack.models.measurement import polar_measurement
+from seatrack.models.motion import ALONG_TRACK_RATIO
 from seatrack.models.motion import cv_matrices
 from seatrack.models.targets import TargetClass
 
@@ -177,7 +178,8 @@ class LevelConfig:
         (), unit="s", doc="mean time in each level, p_stay = exp(-T/tau) (set by a target)"
     )
     along_track_ratio: float = param(
-        0.3, doc="PSD of the level noise along the velocity / across it (1: isotropic)",
+        ALONG_TRACK_RATIO,
+        doc="PSD of the level noise along the velocity / across it (1: isotropic)",
         min=0, max=1, exclusive_min=True,
     )  # fmt: skip
     initial_speed_sigma: float = speed_sigma_param(300.0)

@@ -46,6 +46,7 @@ __all__ = [
     "cv_noise",
     "cv_matrices",
     "cv_noise_discrete",
+    "ALONG_TRACK_RATIO",
     "along_track_core",
     "along_track_shape",
     "ca_transition",
@@ -101,6 +102,11 @@ def cv_noise(dt: ArrayLike, q: ArrayLike, d: int = 2) -> FloatArray:
 
 #: the speed, in velocity standard deviations, above which a track's direction is known
 ALONG_TRACK_MIN_SIGMAS = 3.0
+
+#: the default PSD of a manoeuvre acceleration along the track over its PSD across it (the
+#: level IMM's levels and the multi-target tracker's noise levels; chosen on the tuning
+#: seeds of benchmarks/defaults.py, docs/defaults.md)
+ALONG_TRACK_RATIO = 0.3
 
 
 @njit(cache=True)

@@ -52,6 +52,7 @@ from seatrack.filters.base import step_times
 from seatrack.filters.imm import IMMState
 from seatrack.filters.imm import combine
 from seatrack.filters.imm import mix
+from seatrack.models.motion import along_track_shape
 from seatrack.models.motion import cv_noise
 from seatrack.tracking.merge import moment_match
 
@@ -108,10 +109,16 @@ class NoiseLevels:
     flt : the filter, configured with the lowest noise level
     extra : extra white-noise acceleration PSD of each model, m^2/s^3 (first usually 0)
     p_switch : probability per scan of leaving a model
+    along_track_ratio : PSD of the extra acceleration along the track's velocity over its
+        PSD across it (1: isotropic; see :func:`seatrack.models.motion.along_track_shape`)
     """
 
     def __init__(
-        self, flt: RecursiveFilter, extra: Sequence[float] = (0.0, 1.0), p_switch: float = 0.05
+        self,
+        flt: RecursiveFilter,
+        extra: Sequence[float] = (0.0, 1.0),
+        p_switch: float = 0.05,
+        along_track_ratio: float = 1.0,
     ) -> None:
         ex = np.asarray(extra, dtype=float)
         if ex.ndim != 1 or ex.size < 2 or np.any(ex < 0) or not 0 < p_switch < 1:
@@ -119,8 +126,11 @@ class NoiseLevels:
                 f"need two or more extra noise levels >= 0 and 0 < p_switch < 1, got "
                 f"{list(ex)}, {p_switch}"
             )
+        if not 0 < along_track_ratio <= 1:
+            raise ValueError(f"along_track_ratio must be in (0, 1], got {along_track_ratio}")
         self.flt = flt
         self.extra = ex
+        self.along_track_ratio = float(along_track_ratio)
         M = ex.size
         self.transition = np.full((M, M), p_switch / (M - 1))
         np.fill_diagonal(self.transition, 1 - p_switch)
@@ -148,12 +158,20 @@ class NoiseLevels:
         return TrackState(state.t, state.x, state.P, state.nis, state.log_likelihood,
                           state.status, aux)  # fmt: skip
 
-    def _extra_noise(self, P: FloatArray, dt: FloatArray, B: int) -> FloatArray:
-        """``P`` (``B * M`` model covariances) plus ``extra[j] Q1(dt)`` on position-velocity."""
-        d2 = 2 * self.d
+    def _extra_noise(self, P: FloatArray, dt: FloatArray, B: int, outer: TrackState) -> FloatArray:
+        """``P`` (``B * M`` model covariances) plus ``extra[j] Q1(dt)`` on position-velocity;
+        with ``along_track_ratio < 1`` the unit acceleration is shaped along / across the
+        velocity of each track's combined estimate ``outer`` (``Q1 = blk (x) A``)."""
+        d, d2 = self.d, 2 * self.d
         out = P.copy()
         extra = np.tile(self.extra, B)
-        if dt.size and np.all(dt == dt[0]):  # one scan interval: one unit-PSD matrix
+        if self.along_track_ratio < 1.0:
+            v, Pv = outer.x[:, d:d2], outer.P[:, d:d2, d:d2]
+            A = along_track_shape(v, Pv, self.along_track_ratio)  # (B, d, d)
+            blk = cv_noise(dt[:: self.extra.size], 1.0, 1)  # (B, 2, 2): one interval a track
+            Q1 = np.einsum("bij,bkl->bikjl", blk, A).reshape(B, d2, d2)
+            out[:, :d2, :d2] += extra[:, None, None] * np.repeat(Q1, self.extra.size, axis=0)
+        elif dt.size and np.all(dt == dt[0]):  # one scan interval: one unit-PSD matrix
             out[:, :d2, :d2] += extra[:, None, None] * _unit_cv_noise(float(dt[0]), self.d)
         else:
             out[:, :d2, :d2] += cv_noise(dt, extra, self.d)
@@ -176,7 +194,7 @@ class NoiseLevels:
         # all models of all tracks in one call of the filter: a batch of B * M states
         flat = _flat(models.replace(x=X0, P=P0))
         s = self.flt.predict(flat, np.repeat(tt, M))
-        new = _unflat(s.replace(P=self._extra_noise(s.P, s.t - flat.t, B)), B, M)
+        new = _unflat(s.replace(P=self._extra_noise(s.P, s.t - flat.t, B, state)), B, M)
         _, x, P, _ = combine(new.x, new.P, c, np.zeros_like(c), self._out)
         return predicted(state, tt, x, P, {MODELS: new, MU: c})
 

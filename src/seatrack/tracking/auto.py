@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike
 from seatrack.filters.registry import Method
 from seatrack.filters.registry import build
 from seatrack.filters.registry import method_class
+from seatrack.models.motion import ALONG_TRACK_RATIO
 from seatrack.tracking.adaptive import NoiseLevels
 
 __all__ = [
@@ -146,4 +147,5 @@ def per_track_filter(
     if how == "own":
         return m, how
     extra = q_m - (q_s if how == "levels" else 0.0)
-    return dataclasses.replace(m, filter=NoiseLevels(m.filter, (0.0, extra), P_SWITCH)), how
+    levels = NoiseLevels(m.filter, (0.0, extra), P_SWITCH, along_track_ratio=ALONG_TRACK_RATIO)
+    return dataclasses.replace(m, filter=levels), how

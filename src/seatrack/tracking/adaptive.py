@@ -40,6 +40,7 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
@@ -52,7 +53,7 @@ from seatrack.filters.base import step_times
 from seatrack.filters.imm import IMMState
 from seatrack.filters.imm import combine
 from seatrack.filters.imm import mix
-from seatrack.models.motion import along_track_shape
+from seatrack.models.motion import along_track_core
 from seatrack.models.motion import cv_noise
 from seatrack.tracking.merge import moment_match
 
@@ -99,6 +100,30 @@ def _pick(aux: Any, rows: IntArray, cols: IntArray) -> dict[str, Any]:
     for k, v in aux.items():
         out[k] = v.map(lambda a: a[rows, cols]) if isinstance(v, TrackState) else v[rows, cols]
     return out
+
+
+@njit(cache=True)
+def _add_shaped_noise(P, extra, T, v, Pv, ratio):  # pragma: no cover - compiled
+    """Add to the model covariances ``P (B * M, n, n)`` (track-major) the CV noise of PSD
+    ``extra[j]`` over ``T[b]`` shaped by the velocity ``v[b]`` of track ``b``:
+    ``extra[j] [[T^3/3, T^2/2], [T^2/2, T]] (x) A_b`` on the position-velocity block
+    (``A_b`` of :func:`seatrack.models.motion.along_track_core`)."""
+    M = extra.size
+    d = v.shape[1]
+    A = np.empty((d, d))
+    for b in range(v.shape[0]):
+        along_track_core(v[b], Pv[b], ratio, A)
+        t = T[b]
+        b00, b01, b11 = t**3 / 3.0, t**2 / 2.0, t
+        for j in range(M):
+            r = b * M + j
+            for k in range(d):
+                for m in range(d):
+                    a = extra[j] * A[k, m]
+                    P[r, k, m] += a * b00
+                    P[r, k, d + m] += a * b01
+                    P[r, d + k, m] += a * b01
+                    P[r, d + k, d + m] += a * b11
 
 
 class NoiseLevels:
@@ -166,11 +191,10 @@ class NoiseLevels:
         out = P.copy()
         extra = np.tile(self.extra, B)
         if self.along_track_ratio < 1.0:
-            v, Pv = outer.x[:, d:d2], outer.P[:, d:d2, d:d2]
-            A = along_track_shape(v, Pv, self.along_track_ratio)  # (B, d, d)
-            blk = cv_noise(dt[:: self.extra.size], 1.0, 1)  # (B, 2, 2): one interval a track
-            Q1 = np.einsum("bij,bkl->bikjl", blk, A).reshape(B, d2, d2)
-            out[:, :d2, :d2] += extra[:, None, None] * np.repeat(Q1, self.extra.size, axis=0)
+            c = np.ascontiguousarray
+            v, Pv = c(outer.x[:, d:d2]), c(outer.P[:, d:d2, d:d2])
+            T = c(dt[:: self.extra.size])  # one interval a track
+            _add_shaped_noise(out, self.extra, T, v, Pv, self.along_track_ratio)
         elif dt.size and np.all(dt == dt[0]):  # one scan interval: one unit-PSD matrix
             out[:, :d2, :d2] += extra[:, None, None] * _unit_cv_noise(float(dt[0]), self.d)
         else:

@@ -189,16 +189,16 @@ class NoiseLevels:
         velocity of each track's combined estimate ``outer`` (``Q1 = blk (x) A``)."""
         d, d2 = self.d, 2 * self.d
         out = P.copy()
-        extra = np.tile(self.extra, B)
         if self.along_track_ratio < 1.0:
             c = np.ascontiguousarray
             v, Pv = c(outer.x[:, d:d2]), c(outer.P[:, d:d2, d:d2])
             T = c(dt[:: self.extra.size])  # one interval a track
             _add_shaped_noise(out, self.extra, T, v, Pv, self.along_track_ratio)
         elif dt.size and np.all(dt == dt[0]):  # one scan interval: one unit-PSD matrix
+            extra = np.tile(self.extra, B)
             out[:, :d2, :d2] += extra[:, None, None] * _unit_cv_noise(float(dt[0]), self.d)
         else:
-            out[:, :d2, :d2] += cv_noise(dt, extra, self.d)
+            out[:, :d2, :d2] += cv_noise(dt, np.tile(self.extra, B), self.d)
         return out
 
     # -- the contract -------------------------------------------------------------------

@@ -16,9 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
-from seatrack.io.navigation import write_echoes, write_gyro
-from seatrack.navigation.landmarks import write_map_csv
-from seatrack.simulate.radar_echoes import channel_landmarks, river_route, simulate_radar
+from seatrack.io.landmarks import write_map_csv
+from seatrack.io.navigation import write_echoes
+from seatrack.io.navigation import write_gyro
+from seatrack.simulate.radar_echoes import channel_landmarks
+from seatrack.simulate.radar_echoes import river_route
+from seatrack.simulate.radar_echoes import simulate_radar
 
 
 def main() -> None:

@@ -17,9 +17,11 @@ from pathlib import Path
 import numpy as np
 
 from seatrack.geometry import knots_to_mps
-from seatrack.simulate import Leg, trajectory
+from seatrack.simulate import Leg
+from seatrack.simulate import trajectory
 from seatrack.simulate.files import write_bearings
-from seatrack.simulate.tma import classic_scenario, scenario_from_trajectories
+from seatrack.simulate.tma import classic_scenario
+from seatrack.simulate.tma import scenario_from_trajectories
 
 HERE = Path(__file__).resolve().parent
 

@@ -36,6 +36,7 @@ from seatrack.filters.base import speed_sigma_param
 from seatrack.filters.base import step_times
 from seatrack.filters.imm import IMM
 from seatrack.filters.imm import IMMState
+from seatrack.filters.imm import uniform_transition
 from seatrack.models.measurement import Position
 from seatrack.models.measurement import RangeRate
 from seatrack.models.measurement import Stacked
@@ -147,10 +148,7 @@ class CVCTIMM:
             p = Position(n=n, pos=pos)
             rr = RangeRate(n=n, pos=pos, vel=tuple(range(d, 2 * d)))
             meas.append(Stacked([p, rr]) if self.range_rate else p)
-        M = len(models)
-        transition = np.full((M, M), (1.0 - c.p_stay) / (M - 1))
-        np.fill_diagonal(transition, c.p_stay)
-        self.imm = IMM(models, transition, meas)
+        self.imm = IMM(models, uniform_transition(len(models), c.p_stay), meas)
         self._w = self.imm.union_names.index("w")
 
     @property

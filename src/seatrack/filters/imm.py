@@ -65,6 +65,7 @@ __all__ = [
     "combine",
     "combine_core",
     "check_transition",
+    "uniform_transition",
     "FilterIMM",
 ]
 
@@ -256,6 +257,16 @@ def combine(
     """
     o = np.asarray(out_index, dtype=float)
     return _combine_kernel(X, P, c, ll, o)  # type: ignore[no-any-return]
+
+
+def uniform_transition(M: int, p_stay: float) -> FloatArray:
+    """``M x M`` transition matrix that stays with probability ``p_stay`` and leaves to each
+    other model with ``(1 - p_stay) / (M - 1)`` (symmetric: rows and columns sum to one)."""
+    if M == 1:
+        return np.ones((1, 1))
+    pi = np.full((M, M), (1.0 - p_stay) / (M - 1))
+    np.fill_diagonal(pi, p_stay)
+    return pi
 
 
 def check_transition(transition: FloatArray, M: int) -> None:

@@ -75,6 +75,7 @@ from seatrack.filters.base import finish_update
 from seatrack.filters.base import predicted
 from seatrack.filters.base import speed_sigma_param
 from seatrack.filters.base import step_times
+from seatrack.filters.imm import uniform_transition
 from seatrack.filters.multimodel_kernel import step_kernel
 from seatrack.geometry import G0
 from seatrack.information import as_float64
@@ -197,14 +198,9 @@ class MultiModelConfig:
 
     def transition_matrix(self) -> FloatArray:
         """``pi`` (N, N), columns summing to one."""
-        N = len(self.alphas)
         if self.transition is not None:
             return np.asarray(self.transition, dtype=float)
-        if N == 1:
-            return np.ones((1, 1))
-        pi = np.full((N, N), (1.0 - self.p_stay) / (N - 1))
-        np.fill_diagonal(pi, self.p_stay)
-        return pi
+        return uniform_transition(len(self.alphas), self.p_stay)
 
     def prior_vector(self) -> FloatArray:
         N = len(self.alphas)

@@ -141,20 +141,11 @@ def along_track_shape(v: ArrayLike, Pv: ArrayLike, ratio: float) -> FloatArray:
     v : (..., d) velocity estimates, m/s; Pv : (..., d, d) their covariances, m^2/s^2.
     """
     vv = np.asarray(v, dtype=float)
-    d = vv.shape[-1]
-    PP = np.broadcast_to(np.asarray(Pv, dtype=float), vv.shape + (d,))
-    flat_v = np.ascontiguousarray(vv.reshape(-1, d))
-    flat_P = np.ascontiguousarray(PP.reshape(-1, d, d))
-    out = np.empty((flat_v.shape[0], d, d))
-    _along_track_batch(flat_v, flat_P, float(ratio), out)
-    return out.reshape(vv.shape + (d,))
-
-
-@njit(cache=True)
-def _along_track_batch(v, Pv, ratio, out):  # pragma: no cover - compiled
-    """:func:`along_track_core` of every row of ``v (B, d)``, ``Pv (B, d, d)``."""
-    for b in range(v.shape[0]):
-        along_track_core(v[b], Pv[b], ratio, out[b])
+    PP = np.broadcast_to(np.asarray(Pv, dtype=float), vv.shape + vv.shape[-1:])
+    out = np.empty(vv.shape + vv.shape[-1:])
+    for i in np.ndindex(vv.shape[:-1]):
+        along_track_core(vv[i], np.ascontiguousarray(PP[i]), float(ratio), out[i])
+    return out
 
 
 @lru_cache(maxsize=256)

@@ -41,6 +41,8 @@ def test_reads_tracks_converts_units_and_sensor_velocity(tmp_path):
         ("time_s,range_m,azimuth_deg\n0,100,10\n1,1e308,10\n", "line 3: range_m = 1e.308 is impl"),
         ("time_s,range_m,azimuth_deg\n0,100,10\n1e15,100,10\n", "line 3: time_s = 1e.15 is impl"),
         ("time_s,range_m,azimuth_deg\n0,100,10\n2e6,100,10\n", "line 3: time gap of 2e.06 s"),
+        # the shared limit of every reader: the Unix time of 2100-01-01 (4.1024e9 s)
+        ("time_s,range_m,azimuth_deg\n4.15e9,100,10\n", "line 2: time_s = 4.15e.09 is impl"),
         (
             "time_s,range_m,azimuth_deg,range_rate_mps\n0,100,10,1\n1,100,10,1e9\n",
             "line 3: range_rate_mps = 1e.09 is implausible",

@@ -27,6 +27,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.filters.base import Plots
+from seatrack.io.table import MAX_DISTANCE_M
+from seatrack.io.table import MAX_TIME_S
 from seatrack.io.table import InputError
 from seatrack.io.table import Table
 from seatrack.io.table import check_times
@@ -50,10 +52,10 @@ _SENSOR = ("sensor_x_m", "sensor_y_m", "sensor_z_m")
 #: plausibility limits (absolute values): beyond them a value is an input error
 LIMITS = {
     "range_m": 1e7,  # 10,000 km: beyond any radar or sonar
-    "time_s": 4.2e9,  # seconds: Unix time of the year 2100
+    "time_s": MAX_TIME_S,  # seconds: Unix time of 2100-01-01
     "gap_s": 1e6,  # 11.6 days between two plots of one track
     "range_rate_mps": 1e4,  # 10 km/s
-    "sensor_m": 1e8,  # 100,000 km from the origin of the local frame
+    "sensor_m": MAX_DISTANCE_M,  # 100,000 km from the origin of the local frame
 }
 
 
@@ -192,7 +194,11 @@ def _check_values(tab: Table) -> None:
     _bad(tab, rng > LIMITS["range_m"], f"range_m = {rng[i]:g} is implausible (> 1e7 m)")
     t = tab["time_s"]
     i = np.argmax(np.abs(t) > LIMITS["time_s"])
-    _bad(tab, np.abs(t) > LIMITS["time_s"], f"time_s = {t[i]:g} is implausible (|t| > 4.2e9 s)")
+    _bad(
+        tab,
+        np.abs(t) > LIMITS["time_s"],
+        f"time_s = {t[i]:g} is implausible (|t| > {MAX_TIME_S:.4g} s, 2100)",
+    )
     az = tab["azimuth_deg"]
     _bad(tab, (az < 0) | (az >= 360), "azimuth_deg must be in [0, 360)")
     if "elevation_deg" in tab:
@@ -204,7 +210,8 @@ def _check_values(tab: Table) -> None:
     for c in _SENSOR:
         if c in tab:
             big = np.abs(tab[c]) > LIMITS["sensor_m"]
-            _bad(tab, big, f"{c} = {tab[c][np.argmax(big)]:g} is implausible (> 1e8 m)")
+            bad_value = tab[c][np.argmax(big)]
+            _bad(tab, big, f"{c} = {bad_value:g} is implausible (> {MAX_DISTANCE_M:g} m)")
 
 
 def _check_gaps(tab: Table, labels: NDArray[np.str_]) -> None:

@@ -1,11 +1,13 @@
 """Atomic outputs: a failed write keeps the previous file and leaves no temporary."""
 
+import errno
 import os
 import subprocess
 import sys
 
 import pytest
 
+from seatrack.io import atomic
 from seatrack.io.atomic import OutputError
 from seatrack.io.atomic import atomic_path
 from seatrack.io.atomic import atomic_write
@@ -134,3 +136,35 @@ def test_errors_about_the_temporary_name_the_destination(tmp_path):
         with atomic_path(out) as tmp:
             raise ValueError(f"{tmp}: cannot write (disk full)")
     assert str(ei.value) == f"{out}: cannot write (disk full)"
+
+
+def test_folder_that_refuses_files_is_refused_before_any_work(tmp_path, monkeypatch):
+    # os.access answers yes for root and knows nothing of read-only or special file systems
+    # (/proc): the folder check creates (and removes) a probe file
+    def refuse(*args, **kwargs):
+        raise OSError(errno.EROFS, os.strerror(errno.EROFS))
+
+    monkeypatch.setattr(atomic.tempfile, "mkstemp", refuse)
+    out = tmp_path / "t.csv"
+    msg = f"^{out}: folder {tmp_path} is not writable \\(Read-only"
+    with pytest.raises(OutputError, match=msg):
+        check_output_path(out)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_probe_leaves_nothing_and_temporary_failure_names_the_destination(tmp_path, monkeypatch):
+    out = tmp_path / "t.csv"
+    check_output_path(out)
+    assert list(tmp_path.iterdir()) == []
+    real = atomic.tempfile.mkstemp
+
+    def refuse_outputs(*args, **kwargs):  # the probe passes, the output's temporary fails
+        if kwargs.get("prefix", "").startswith(".seatrack-probe."):
+            return real(*args, **kwargs)
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(atomic.tempfile, "mkstemp", refuse_outputs)
+    with pytest.raises(OutputError, match=f"^{out}: cannot create a file in {tmp_path}"):
+        with atomic_write(out) as fh:
+            fh.write("x")
+    assert list(tmp_path.iterdir()) == []

@@ -59,6 +59,14 @@ def _folder_problem(p: Path, create: bool) -> str | None:
             return f"cannot create the folder {p} ({exc.strerror})"
     if p.exists() and not os.access(p, os.W_OK | os.X_OK):
         return f"folder {p} is not writable"
+    if p.is_dir():  # os.access says yes to root and knows no read-only or special file system
+        try:
+            fd, probe = tempfile.mkstemp(dir=p, prefix=".seatrack-probe.")
+        except OSError as exc:
+            return f"folder {p} is not writable ({exc.strerror or exc})"
+        os.close(fd)
+        with contextlib.suppress(OSError):
+            os.unlink(probe)
     return None
 
 
@@ -116,9 +124,16 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
     the file name (``savefig``) see the right one.
     """
     dest = check_output_path(path)
-    fd, tmp = tempfile.mkstemp(
-        dir=dest.parent, prefix=f".{dest.name}.", suffix=(dest.suffix if suffix is None else suffix)
-    )
+    try:
+        fd, tmp = tempfile.mkstemp(
+            dir=dest.parent,
+            prefix=f".{dest.name}.",
+            suffix=(dest.suffix if suffix is None else suffix),
+        )
+    except OSError as exc:
+        raise OutputError(
+            f"{dest}: cannot create a file in {dest.parent} ({exc.strerror or exc})"
+        ) from None
     os.close(fd)
     tmp_path = Path(tmp)
     try:

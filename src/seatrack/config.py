@@ -306,6 +306,8 @@ def describe(cls: type) -> list[tuple[str, Any, str, str]]:
 def load_toml(path: str | Path) -> dict[str, Any]:
     """Read a TOML file; errors name the file (:class:`ConfigError`)."""
     p = Path(path)
+    if p.is_dir():
+        raise ConfigError(f"{p}: is a directory, expected a TOML file")
     if not p.is_file():
         raise ConfigError(f"{p}: configuration file not found")
     try:

@@ -16,6 +16,7 @@ from ais_samples import data_file
 from seatrack.io.ais import read_ais_csv
 from seatrack.io.ais.columnar import NotColumnar
 from seatrack.io.ais.columnar import iter_csv_blocks
+from seatrack.io.table import InputError
 
 DMA_HEAD = (
     "# Timestamp,Type of mobile,MMSI,Latitude,Longitude,Navigational status,ROT,SOG,COG,"
@@ -113,3 +114,11 @@ def test_a_bad_number_reads_the_file_as_text_with_reasons(tmp_path: Path) -> Non
     assert r.reject.tolist() == ["", "position not a number", "invalid mmsi", ""]
     assert np.isnan(r.sog_kn[0])
     assert r.t[3] == pytest.approx(1667293202.5)
+
+
+def test_binary_file_is_refused_with_a_printable_header(tmp_path):
+    p = tmp_path / "x.csv"
+    p.write_bytes(b"\x7fELF\x02\x01\x01\x00\x00\x1b[31m,\x00\x01\n" + bytes(range(256)))
+    with pytest.raises(InputError, match="not a recognised AIS CSV header") as ei:
+        read_ais_csv(p)
+    assert str(ei.value).isprintable()

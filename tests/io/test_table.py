@@ -1,3 +1,5 @@
+import os
+
 import numpy as np
 import pytest
 
@@ -5,6 +7,7 @@ from seatrack.io.table import Check
 from seatrack.io.table import InputError
 from seatrack.io.table import angle_deg
 from seatrack.io.table import between
+from seatrack.io.table import check_input_file
 from seatrack.io.table import check_times
 from seatrack.io.table import decode_text
 from seatrack.io.table import latitude
@@ -75,6 +78,22 @@ def test_check_times_unsorted_and_duplicate(tmp_path):
 def test_missing_file(tmp_path):
     with pytest.raises(InputError, match="file not found"):
         read_csv_table(tmp_path / "nope.csv", ["a"])
+
+
+def test_input_file_check_names_what_is_wrong(tmp_path):
+    f = tmp_path / "f.csv"
+    f.write_text("a\n1\n")
+    assert check_input_file(str(f)) == f
+    with pytest.raises(InputError, match=f"^{tmp_path}: is a directory, expected a CSV file$"):
+        read_csv_table(tmp_path, ["a"])
+    loop = tmp_path / "loop"
+    loop.symlink_to(tmp_path / "loop")
+    with pytest.raises(InputError, match="loop: file not found \\(a broken or looping symbolic"):
+        read_csv_table(loop, ["a"])
+    fifo = tmp_path / "pipe"
+    os.mkfifo(fifo)  # never opened: the check refuses it before any read (no hang)
+    with pytest.raises(InputError, match="pipe: not a regular file .*expected an AIS file"):
+        check_input_file(fifo, "an AIS file")
 
 
 # --- encodings, separators, declared checks (issue 13) ---------------------------------

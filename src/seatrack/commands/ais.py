@@ -28,6 +28,7 @@ import numpy as np
 import typer
 
 from seatrack.io.table import InputError
+from seatrack.io.table import check_input_file
 
 _SIZE = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*([kmgt]?)i?b?\s*$", re.IGNORECASE)
 
@@ -222,10 +223,7 @@ def register(app: typer.Typer) -> None:
             raise InputError(f"--tile-url: needs {{z}}, {{x}} and {{y}}, got {tile_url!r}")
         _check_outputs(out, [geojson, html], use_dask)
         for p in inputs:
-            if not p.exists():
-                raise InputError(f"{p}: file not found")
-            if not p.is_file():
-                raise InputError(f"{p}: not a file")
+            check_input_file(p, "an AIS file")
         for ln in run(inputs, out, cfg, limit, geojson, html, tile_url, use_dask, scheduler):
             typer.echo(ln)
 

@@ -42,6 +42,7 @@ from seatrack.io.atomic import atomic_write
 from seatrack.io.atomic import check_output_path
 from seatrack.io.table import InputError
 from seatrack.io.table import Table
+from seatrack.io.table import check_input_file
 from seatrack.io.table import check_times
 from seatrack.io.table import decode_text
 from seatrack.io.table import read_csv_table
@@ -74,9 +75,7 @@ OPTIONAL = ("elevation_deg", "range_rate_mps", "sensor_x_m", "sensor_y_m", "sens
 
 def has_track_column(path: str | Path) -> bool:
     """Whether the CSV header of ``path`` has a ``track`` column (a labelled plot file)."""
-    p = Path(path)
-    if not p.is_file():
-        raise InputError(f"{p}: file not found")
+    p = check_input_file(path, "a CSV file")
     with p.open("rb") as fh:
         head = fh.read(1 << 16).splitlines()  # LF, CRLF or the old CR alone
     first = head[0] if head else b""

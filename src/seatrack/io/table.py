@@ -64,6 +64,8 @@ __all__ = [
     "Table",
     "Check",
     "read_csv_table",
+    "check_input_file",
+    "describe_header",
     "check_times",
     "between",
     "positive",
@@ -259,11 +261,35 @@ def decode_text(data: bytes) -> tuple[str, tuple[int, ...]]:
     return "".join(parts), tuple(latin1)
 
 
-def _read_text(p: Path) -> tuple[str, tuple[int, ...]]:
+def check_input_file(path: str | Path, kind: str = "a file") -> Path:
+    """The check of every input file before it is read: it exists and is a regular file.
+
+    Parameters
+    ----------
+    path : the file as the user gave it.
+    kind : what is expected, for the message (``"a CSV file"``, ``"an AIS file"``).
+
+    Raises
+    ------
+    InputError
+        ``PATH: file not found`` (also a broken or looping symbolic link, said so), ``PATH:
+        is a directory, expected KIND`` or ``PATH: not a regular file (a device, pipe or
+        socket), expected KIND``.
+    """
+    p = Path(path)
     if not p.exists():
+        if p.is_symlink():
+            raise InputError(f"{p}: file not found (a broken or looping symbolic link)")
         raise InputError(f"{p}: file not found")
+    if p.is_dir():
+        raise InputError(f"{p}: is a directory, expected {kind}")
     if not p.is_file():
-        raise InputError(f"{p}: is a directory or a device, expected a CSV file")
+        raise InputError(f"{p}: not a regular file (a device, pipe or socket), expected {kind}")
+    return p
+
+
+def _read_text(p: Path) -> tuple[str, tuple[int, ...]]:
+    check_input_file(p, "a CSV file")
     try:
         data = p.read_bytes()
     except OSError as exc:
@@ -271,16 +297,22 @@ def _read_text(p: Path) -> tuple[str, tuple[int, ...]]:
     return decode_text(data)
 
 
+def describe_header(header: Sequence[str], most: int = 12) -> str:
+    """The header names of a file as an error message shows them: at most ``most`` names,
+    each shortened to 40 characters, a name with unprintable characters (a binary file) as
+    its ``repr``; ``"no columns"`` for an empty header."""
+    shown = [repr(h) if not h.isprintable() else h for h in header[:most]]
+    found = ", ".join(_short(h) for h in shown) + (", ..." if len(header) > most else "")
+    return found or "no columns"
+
+
 def _header_problem(p: Path, header: list[str], missing: list[str]) -> InputError:
-    shown = [repr(h) if not h.isprintable() else h for h in header[:12]]
-    found = ", ".join(_short(h) for h in shown) + (", ..." if len(header) > 12 else "")
+    found = describe_header(header)
     hint = ""
     if len(header) == 1 and any(s in header[0] for s in (";", "\t")):
         sep = "';'" if ";" in header[0] else "a tab"
         hint = f" (the file seems to use {sep} as separator; seatrack reads comma-separated CSV)"
-    return InputError(
-        f"{p}: missing required column(s) {', '.join(missing)}; found {found or 'no columns'}{hint}"
-    )
+    return InputError(f"{p}: missing required column(s) {', '.join(missing)}; found {found}{hint}")
 
 
 def read_csv_table(

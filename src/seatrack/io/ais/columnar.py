@@ -39,6 +39,7 @@ from seatrack.io.ais.reports import mark
 from seatrack.io.ais.reports import mmsi_codes
 from seatrack.io.ais.reports import parse_times
 from seatrack.io.table import InputError
+from seatrack.io.table import describe_header
 
 FloatArray = NDArray[np.float64]
 
@@ -115,7 +116,7 @@ def detect_schema(header: Sequence[str]) -> str:
             return name
     needs = "; ".join(f"{name}: {', '.join(m[f] for f in REQUIRED)}" for name, m in SCHEMAS.items())
     raise InputError(
-        f"not a recognised AIS CSV header ({', '.join(header) or 'no columns'}); "
+        f"not a recognised AIS CSV header ({describe_header(header)}); "
         f"expected the columns of one of: {needs}"
     )
 

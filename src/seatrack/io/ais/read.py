@@ -26,6 +26,7 @@ from seatrack.io.ais.reports import AisReports
 from seatrack.io.ais.reports import concat_reports
 from seatrack.io.ais.reports import mark_duplicates
 from seatrack.io.table import InputError
+from seatrack.io.table import check_input_file
 
 __all__ = ["file_blocks", "read_file", "read_ais", "read_ais_csv", "looks_like_nmea"]
 
@@ -43,10 +44,7 @@ def looks_like_nmea(path: str | Path) -> bool:
 
 
 def _check_file(p: Path) -> None:
-    if not p.exists():
-        raise InputError(f"{p}: file not found")
-    if not p.is_file():
-        raise InputError(f"{p}: not a file")
+    check_input_file(p, "an AIS file")
     if p.stat().st_size == 0:
         raise InputError(f"{p}: file is empty")
 

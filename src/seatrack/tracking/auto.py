@@ -68,21 +68,21 @@ P_START = 0.9
 #: mean GOSPA (m) on the tuning scenarios given only the sensor noise, own / wrap [/ levels]
 #: (``python benchmarks/multitarget.py --methods``, method defaults of this revision)
 AUTO_NOISE: dict[str, str] = {
-    "ekf": "levels",  # 180.9 / 182.6 / 154.6 (its default q = 1 suits no target class)
-    "ekf-rb": "wrap",  # 177.8 / 153.9: its sonar q (0.02 m/s^2) needs the manoeuvre level
-    "huber": "own",  # 157.6 / 157.6: a level IMM already (wrap is void)
-    "student-t": "own",  # 159.7 / 159.7: idem
-    "robust": "own",  # 157.3 / 157.3: idem
-    "robust-adaptive": "own",  # 156.4 / 156.4: idem
-    "turning": "own",  # 156.1 / 156.1: idem
-    "imm": "own",  # 184.2 / 184.2: its update starts from its model states (wrap is void)
-    "mm": "own",  # 156.1 / 156.1: a level IMM already
+    "ekf": "levels",  # 180.2 / 181.2 / 152.1 (its default q = 1 suits no target class)
+    "ekf-rb": "wrap",  # 177.3 / 152.2: its sonar q (0.02 m/s^2) needs the manoeuvre level
+    "huber": "own",  # 157.0 / 157.0: a level IMM already (wrap is void)
+    "student-t": "own",  # 159.3 / 159.3: idem
+    "robust": "own",  # 156.6 / 156.6: idem
+    "robust-adaptive": "own",  # 155.8 / 155.8: idem
+    "turning": "own",  # 155.5 / 155.5: idem
+    "imm": "own",  # 183.9 / 183.9: its update starts from its model states (wrap is void)
+    "mm": "own",  # 155.5 / 155.5: a level IMM already
     "mm-rangerate": "own",  # as mm (needs range rate: not in the tuning scenarios)
     # the sources' methods run as their sources describe, process noise included
-    "turning-spec": "own",  # 173.2 / 175.2
-    "robust-spec": "own",  # 182.3 / 182.4
-    "robust-adaptive-spec": "own",  # 184.8 / 184.8
-    "mm-spec": "own",  # 249.2 / 249.2
+    "turning-spec": "own",  # 172.4 / 173.5
+    "robust-spec": "own",  # 182.1 / 182.1
+    "robust-adaptive-spec": "own",  # 184.5 / 184.4
+    "mm-spec": "own",  # 248.8 / 248.8
     "mm-rangerate-spec": "own",
 }
 

@@ -386,6 +386,7 @@ def tune_seatrack(runs: list[MultiTargetRun]) -> None:
         "mean_life": [300.0, 600.0, 1800.0, 5000.0],
         "gate_probability": [0.99, 0.999, 0.9999],
         "max_speed": [15.4, 20.6, 25.7],  # 30, 40, 50 kn
+        "initial_speed_sigma": [4.1, 6.2, 8.4],  # 8, 12, 16.3 kn (16.3: max_speed / sqrt 6)
         "init_scans": [2, 3],
         "association": ["gnn", "jpda"],
     }
@@ -568,6 +569,11 @@ def localisation(runs: list[MultiTargetRun]) -> None:
                     )
         e = np.array(rows)
         e2 = e[:, 0] ** 2
+        sc = score(run, res)
+        part = sc.rms_parts()
+        print(f"{TUNE[k].name}: mean GOSPA {sc.mean_gospa:.1f} m; RMS parts: localisation "
+              f"{part['localisation']:.1f}, missed {part['missed']:.1f}, false "
+              f"{part['false']:.1f} m")  # fmt: skip
         turning = e[:, 1] > 0.02
         share = e2[turning].sum() / e2.sum()
         print(f"{TUNE[k].name}: {e.shape[0]} matched estimates, RMS {np.sqrt(e2.mean()):.1f} m; "

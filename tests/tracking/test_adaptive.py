@@ -70,6 +70,19 @@ def test_manoeuvre_probability_rises_in_a_turn_and_beats_the_low_noise_filter():
     assert "manoeuvre" in cols and 0 <= cols["manoeuvre"][0] <= 1
 
 
+def test_new_tracks_start_in_the_first_model_with_the_given_probability():
+    x, P = plot_gaussian(_plots([Leg.straight(10.0)])[0].take([0, 1]), SN, 10.0)
+    flt = EKF(EKFConfig(q=0.01), SN)
+    even = NoiseLevels(flt, (0.0, 0.5, 1.0)).initiate(np.zeros(2), x, P)
+    assert np.allclose(even.aux["noise_mu"], 1 / 3)
+    mu = np.asarray(NoiseLevels(flt, (0.0, 0.5, 1.0), start=0.8).initiate(np.zeros(2), x, P)
+                    .aux["noise_mu"])  # fmt: skip
+    assert np.allclose(mu, [[0.8, 0.1, 0.1]] * 2)
+    for bad in (0.0, 1.0, 1.5):
+        with pytest.raises(ValueError, match="start"):
+            NoiseLevels(flt, (0.0, 1.0), start=bad)
+
+
 def test_batch_operations_keep_the_nested_models():
     plots, _ = _plots([Leg.straight(30.0)])
     imm = NoiseLevels(EKF(EKFConfig(q=0.01), SN), (0.0, 1.0))

@@ -255,6 +255,28 @@ def test_config_validation_and_edge_units():
         dataclasses.replace(TrackerConfig(), m_of_n=(2.5, 4))
 
 
+def test_new_tracks_take_the_velocity_prior_of_the_config():
+    """A new track is the first plot with the configured velocity prior, updated with the
+    second: with the plain EKF it equals that fusion done by hand; a tighter prior gives a
+    smaller velocity variance."""
+    p = Plots(np.array([0.0, 2.5]), np.array([8000.0, 8010.0]), np.radians([30.0, 30.01]))
+    ekf = EKF(EKFConfig(q=0.1), SN)
+    var = []
+    for kn in (6.0, 24.0):
+        cfg = TrackerConfig(initial_speed_sigma=kn * 1852 / 3600)
+        trk = MultiTargetTracker(ekf, SN, cfg)
+        trk.step(p.take([0]))
+        res = trk.step(p.take([1]))
+        x, P = plot_gaussian(p.take([0]), SN, cfg.initial_speed_sigma)
+        want = ekf.update(ekf.predict(ekf.initiate(p.t[:1], x, P), p.t[1:]), p.take([1]))
+        assert res.track.size == 1
+        assert np.allclose(res.state.x, want.x) and np.allclose(res.state.P, want.P)
+        var.append(np.trace(res.state.P[0, 2:, 2:]))
+    assert var[0] < var[1]
+    cfg = parse_config(TrackerConfig, {"initial_speed_sigma_kn": 10})
+    assert cfg.initial_speed_sigma == pytest.approx(10 * 1852 / 3600)
+
+
 def test_rejected_update_counts_as_a_miss():
     class Rejecting(EKF):
         def update(self, state, plots):

@@ -25,7 +25,9 @@ The model states live in ``aux["noise_models"]`` (one nested TrackState whose ar
 ``(B, M, ...)``: the models stacked on a second axis) and the model probabilities in
 ``aux["noise_mu"]``; the ``manoeuvre`` output column is the probability of the high-noise
 model. The switching probability per scan ``p_switch`` makes the transition matrix
-``[[1 - p, p], [p, 1 - p]]``. Only the contract's state layout is used (positions
+``[[1 - p, p], [p, 1 - p]]``. A new track starts in the first (lowest) model with
+probability ``start`` (the rest shared evenly by the others; default: all models alike).
+Only the contract's state layout is used (positions
 ``0..d-1``, velocities ``d..2d-1``), so any filter can be wrapped -- as long as its
 ``update`` starts from the state ``predict`` gave (``x``, ``P``); a filter that keeps its
 own prediction in ``aux`` ignores the extra noise. :meth:`NoiseLevels.merge` reduces JPDA
@@ -136,6 +138,8 @@ class NoiseLevels:
     p_switch : probability per scan of leaving a model
     along_track_ratio : PSD of the extra acceleration along the track's velocity over its
         PSD across it (1: isotropic; see :func:`seatrack.models.motion.along_track_shape`)
+    start : probability of the first model at initiation, the others sharing the rest
+        evenly (none: ``1 / M`` each)
     """
 
     def __init__(
@@ -144,6 +148,7 @@ class NoiseLevels:
         extra: Sequence[float] = (0.0, 1.0),
         p_switch: float = 0.05,
         along_track_ratio: float = 1.0,
+        start: float | None = None,
     ) -> None:
         ex = np.asarray(extra, dtype=float)
         if ex.ndim != 1 or ex.size < 2 or np.any(ex < 0) or not 0 < p_switch < 1:
@@ -153,12 +158,17 @@ class NoiseLevels:
             )
         if not 0 < along_track_ratio <= 1:
             raise ValueError(f"along_track_ratio must be in (0, 1], got {along_track_ratio}")
+        if start is not None and not 0 < start < 1:
+            raise ValueError(f"start must be in (0, 1), got {start}")
         self.flt = flt
         self.extra = ex
         self.along_track_ratio = float(along_track_ratio)
         M = ex.size
         self.transition = np.full((M, M), p_switch / (M - 1))
         np.fill_diagonal(self.transition, 1 - p_switch)
+        first = 1.0 / M if start is None else float(start)
+        self.start = np.full(M, (1.0 - first) / (M - 1))
+        self.start[0] = first
         self.d = flt.d
         self.range_rate = flt.range_rate
         n = len(flt.state_names)
@@ -204,9 +214,8 @@ class NoiseLevels:
     # -- the contract -------------------------------------------------------------------
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
         s = self.flt.initiate(t, x, P)
-        M = self.extra.size
-        models = _zip_stack([s] * M)
-        mu = np.full((len(s), M), 1.0 / M)
+        models = _zip_stack([s] * self.extra.size)
+        mu = np.tile(self.start, (len(s), 1))
         return TrackState(s.t, s.x, s.P, s.nis, s.log_likelihood, s.status,
                           {MODELS: models, MU: mu})  # fmt: skip
 

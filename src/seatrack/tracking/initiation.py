@@ -12,9 +12,10 @@ gate probability, ``d`` degrees of freedom). Candidates are found with a KD-tree
 ``max_speed dt`` plus a noise bound), so the cost grows about linearly with the plots. Each
 plot starts at most one track: the pairs are chosen by a global assignment that maximises
 the number of pairs and then their likelihood under a zero-mean velocity prior with
-standard deviation ``max_speed / sqrt(6)`` per axis (speeds uniform up to ``max_speed``,
-courses uniform). Free plots wait up to ``init_scans - 1`` scans for a partner, so a
-missed detection right after a target's first plot does not delay its track.
+standard deviation ``speed_sigma`` per axis (the target class's speeds, random courses;
+by default ``max_speed / sqrt(6)``: speeds uniform up to ``max_speed``). Free plots wait
+up to ``init_scans - 1`` scans for a partner, so a missed detection right after a
+target's first plot does not delay its track.
 
 The new track (:meth:`MultiTargetTracker._start
 <seatrack.tracking.tracker.MultiTargetTracker>`) is the first plot with that velocity
@@ -92,6 +93,7 @@ def speed_gate_pairs(
     max_speed: float,
     probability: float,
     sensor_pos: FloatArray,
+    speed_sigma: float | None = None,
 ) -> InitPairs:
     """Pairs of earlier plots ``p1 (N1, d)`` (times ``t1``) and this scan's ``p2 (N2, d)``.
 
@@ -102,6 +104,8 @@ def speed_gate_pairs(
     max_speed : m/s
     probability : gate probability of the noise allowance
     sensor_pos : (3,) m -- the radar (its range scales the noise bound of the pre-search)
+    speed_sigma : m/s -- velocity prior std per axis that ranks the pairs (none:
+        ``max_speed / sqrt(6)``, speeds uniform up to ``max_speed``, random courses)
     """
     e = np.zeros(0, np.int64)
     if len(p1) == 0 or len(p2) == 0:
@@ -123,7 +127,7 @@ def speed_gate_pairs(
     C = C1[i] + C2[j]
     ok = nis_logpdf(excess, C)[0] <= gamma
     i, j, delta, C, dt = i[ok], j[ok], delta[ok], C[ok], dt[ok]
-    sigma_v = max_speed / math.sqrt(6.0)  # uniform speed up to max_speed, random course
+    sigma_v = max_speed / math.sqrt(6.0) if speed_sigma is None else speed_sigma
     prior = C + np.eye(d) * ((sigma_v * dt) ** 2)[:, None, None]
     log_like = nis_logpdf(delta, prior)[1]  # -(Mahalanobis + log det + d log 2 pi) / 2
     chosen = gnn(j, i, _PAIR_BONUS + 2.0 * log_like, len(p2), len(p1))

@@ -169,6 +169,11 @@ class TrackerConfig:
         40.0, key="max_speed_kn", unit="kn", doc="speed gate of two-point initiation",
         min=1e-3, max=1e5,  # physical bounds: a new track's speed variance stays finite
     )  # fmt: skip
+    initial_speed_sigma: float = param(
+        12.0, key="initial_speed_sigma_kn", unit="kn",
+        doc="velocity std per axis of a new track (target class: RMS speed sqrt(2) x this)",
+        min=1e-3, max=1e5,  # a new track's velocity variance stays finite
+    )  # fmt: skip
     association: str = param("gnn", doc="association of the tracks", choices=("gnn", "jpda"))
     clutter_memory: float = param(20.0, unit="scans", doc="memory of the clutter estimate", min=1)
     init_scans: int = param(
@@ -516,7 +521,7 @@ class MultiTargetTracker:
             pairs = speed_gate_pairs(
                 cat(lambda e: e.pos), cat(lambda e: e.cov), cat(lambda e: e.plots.t),
                 scan.pos[free], cov, scan.t, cfg.max_speed, cfg.gate_probability,
-                plots.sensor[0],
+                plots.sensor[0], cfg.initial_speed_sigma,
             )  # fmt: skip
             if pairs.first.size:
                 prev = entries[0] if len(entries) == 1 else PendingPlots.concat(entries)
@@ -584,12 +589,12 @@ class MultiTargetTracker:
         self.pending = entries
 
     def _start(self, first: Plots, second: Plots, t: float) -> tuple[TrackState, FloatArray]:
-        """New tracks: the first plot with a zero-mean velocity prior (the target class),
-        predicted to this scan and updated with the second plot by the filter itself; and
-        the log density of the second plot under the prediction (polar measurement space,
-        from the filter's innovation as in gating)."""
-        sigma_v = self.config.max_speed / math.sqrt(6.0)  # uniform speed, random course
-        x, P = plot_gaussian(first, self.sensor, sigma_v)
+        """New tracks: the first plot with a zero-mean velocity prior (std
+        ``initial_speed_sigma`` per axis: the target class), predicted to this scan and
+        updated with the second plot by the filter itself; and the log density of the
+        second plot under the prediction (polar measurement space, from the filter's
+        innovation as in gating)."""
+        x, P = plot_gaussian(first, self.sensor, self.config.initial_speed_sigma)
         pred = self.flt.predict(self.flt.initiate(first.t, x, P), np.full(len(first), t))
         log_g = nis_logpdf(*self.flt.innovation(pred, second))[1]
         if self.space != POLAR:

@@ -39,13 +39,17 @@ range rate, with isotropic levels on the old ladder and with the along-track sha
 prints the level probabilities and the errors along / across the line of sight over the
 weave (why range rate hurt the level IMM there: docs/defaults.md).
 
+``--onsets`` runs the level methods on ``fighter`` with and without range rate and prints
+the error and the agile levels' probability around the manoeuvre onsets (why ``robust``,
+``huber`` and ``student-t`` lagged there: docs/defaults.md).
+
 ``--gross-outliers`` runs the two contaminated sets with their outliers at 10 sigma
 (variance x 100 instead of Ramazanov's x 10 range, x 25 azimuth) through the level-IMM
 methods with their default outlier scale (100) and with Ramazanov's (10, 25).
 
 Run: ``python benchmarks/defaults_experiments.py --runs 20`` (TUNING seeds),
 ``--headline`` (HEADLINE seeds), ``--sets``, ``--consistency`` (multiple-model methods),
-``--model-bounds [--sets ...]``, ``--gross-outliers``, ``--range-rate-levels``.
+``--model-bounds [--sets ...]``, ``--gross-outliers``, ``--range-rate-levels``, ``--onsets``.
 """
 
 from __future__ import annotations
@@ -603,7 +607,7 @@ def gross_outliers(n: int, tuning: bool) -> None:
         mix = ref["cv mixture R (hindsight q)"]
         print(f"{name}, outliers at 10 sigma: mixture-R EKF {mix:.1f} m, clairvoyant "
               f"{ref['clairvoyant (hindsight q)']:.1f} m")  # fmt: skip
-        for method in ("robust-adaptive", "robust", "turning", "mm"):
+        for method in ("robust-adaptive", "robust", "huber", "student-t", "turning", "mm"):
             for label, extra in (("k = 100 (default)", {}), ("k = (10, 25)", ramazanov)):
                 est = run_method(method, scs, {**nominal_config(scs[0]), **extra})
                 pos, vel = rmse(est, scs)
@@ -611,15 +615,19 @@ def gross_outliers(n: int, tuning: bool) -> None:
                       f"/ mixture-R {pos / mix:.3f}")  # fmt: skip
 
 
-def level_trace(scs: Sequence[Scenario], config: dict[str, Any]) -> tuple[Estimate, np.ndarray]:
-    """``turning`` from the registry driven scan by scan over the runs of a set (one batch):
-    the combined estimates ``(B, N, 4)`` and the level probabilities ``(B, N, M)``."""
+def level_trace(
+    scs: Sequence[Scenario], config: dict[str, Any], name: str = "turning"
+) -> tuple[Estimate, np.ndarray]:
+    """Level method ``name`` from the registry driven scan by scan over the runs of a set
+    (one batch): the combined estimates ``(B, N, 4)`` and the level probabilities
+    ``(B, N, M)``."""
     from defaults import nominal_config
     from seatrack.filters.registry import build
     from seatrack.simulate.families import labelled_runs
 
     plots = labelled_runs(scs)
-    method = build("turning", {**nominal_config(scs[0]), **config}, range_rate=True)
+    table = {**nominal_config(scs[0]), **config}
+    method = build(name, table, range_rate=plots.has_range_rate)
     flt = method.filter
     B, N = len(scs), len(scs[0].plots)
     first = plots.take(np.arange(B) * N)
@@ -671,6 +679,46 @@ def range_rate_levels(n: int, tuning: bool) -> None:
                   f"{rms(across, slice(2, 4)):5.1f} m/s")  # fmt: skip
 
 
+def scans_since_onset(manoeuvring: np.ndarray) -> np.ndarray:
+    """Scans since the start of the current manoeuvre ``(B, N)`` (a large number off one)."""
+    since = np.full(manoeuvring.shape, 10**6)
+    for b, row in enumerate(manoeuvring):
+        for k in np.flatnonzero(row):
+            since[b, k] = since[b, k - 1] + 1 if k > 0 and row[k - 1] else 0
+    return since
+
+
+def manoeuvre_onsets(n: int, tuning: bool) -> None:
+    """Why the robust rules lagged on ``fighter`` (docs/defaults.md): the level methods
+    scan by scan, with and without range rate (where the method has the key); position RMSE
+    (after the transient), the RMS error over scans 0-2 and 3-5 after each manoeuvre onset
+    of the truth and the mean probability of the agile levels (``q >= 1e2``) over scans
+    0-2."""
+    from seatrack.config import ConfigError
+
+    scs = [SETS["fighter"].make(k) for k in seeds(n, tuning)]
+    truth = np.stack([s.truth for s in scs])
+    since = scans_since_onset(np.stack([s.manoeuvring for s in scs]))
+    since[:, :10] = -1  # the transient
+    print(f"fighter, {n} {'tuning' if tuning else 'headline'} runs")
+    for name in ("mm", "robust-adaptive", "robust", "huber", "student-t"):
+        for rr in (False, True):
+            if name == "mm" and rr:
+                continue
+            try:
+                est, mu = level_trace(scs, {"use_range_rate": rr}, name)
+            except ConfigError:  # a version of the method without the key: no range rate
+                if rr:
+                    continue
+                est, mu = level_trace(scs, {}, name)
+            e2 = np.sum((est - truth)[..., :2] ** 2, -1)
+            onset, later = (since >= 0) & (since < 3), (since >= 3) & (since < 6)
+            agile = mu[..., 3:].sum(-1)[onset].mean()
+            print(f"  {name:16s} rr {'yes' if rr else 'no ':3s} pos {rmse(est, scs)[0]:6.1f} m | "
+                  f"error 0-2 / 3-5 scans after onset {np.sqrt(e2[onset].mean()):5.0f} / "
+                  f"{np.sqrt(e2[later].mean()):5.0f} m | P(agile) 0-2 {agile:.2f}")  # fmt: skip
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     from seatrack.models.targets import target_class
 
@@ -683,7 +731,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     ap.add_argument("--model-bounds", action="store_true", help="hindsight single models")
     ap.add_argument("--gross-outliers", action="store_true", help="10-sigma outliers")
     ap.add_argument("--range-rate-levels", action="store_true", help="rr and the levels")
+    ap.add_argument("--onsets", action="store_true", help="robust rules at manoeuvre onsets")
     a = ap.parse_args(argv)
+    if a.onsets:
+        manoeuvre_onsets(a.runs, not a.headline)
+        return
     if a.range_rate_levels:
         range_rate_levels(a.runs, not a.headline)
         return

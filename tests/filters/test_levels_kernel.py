@@ -1,7 +1,8 @@
 """The fused kernels of the level IMM (seatrack.filters.levels_kernel) against the NumPy
 composition they replace: IMM mixing / Kalman prediction / combination gufuncs, the polar
 measurement, :func:`mixture_update` per level, the IRLS updates of
-:mod:`seatrack.filters.robust_baselines` and the heavy-tailed level likelihood -- on random
+:mod:`seatrack.filters.robust_baselines` with per-channel thresholds / degrees of freedom --
+on random
 batches in 2-D and 3-D, with range rate, contaminated patterns, learnt outlier
 probabilities, an unusable plot and a non-positive-definite innovation covariance."""
 
@@ -27,14 +28,15 @@ from seatrack.filters.imm import mix
 from seatrack.filters.levels import ContaminatedConfig
 from seatrack.filters.levels import ContaminatedLevels
 from seatrack.filters.levels import HuberLevels
+from seatrack.filters.levels import HuberLevelsConfig
 from seatrack.filters.levels import LevelIMM
 from seatrack.filters.levels import LevelIMMConfig
 from seatrack.filters.levels import RamazanovLevels
 from seatrack.filters.levels import StudentTLevels
+from seatrack.filters.levels import StudentTLevelsConfig
 from seatrack.filters.levels import contaminated_loglik
 from seatrack.filters.levels import level_noise
 from seatrack.filters.levels import mixture_update
-from seatrack.filters.levels import student_t_logpdf
 from seatrack.filters.levels_kernel import Rule
 from seatrack.filters.robust_baselines import HuberConfig
 from seatrack.filters.robust_baselines import StudentTConfig
@@ -86,7 +88,9 @@ class _Res:
 
 def _gauss_update(x: Any, P: Any, z: Any, hx: Any, H: Any, R: Any, angular: Any, check: Any):
     """The diagonal-R extended update through :func:`mixture_update` (as main's levels)."""
-    y = wrap_angles(z - hx, np.asarray(angular, dtype=float))
+    ang = np.zeros(z.shape[-1])  # robust_baselines' range and bearing; range rate is linear
+    ang[: len(angular)] = angular
+    y = wrap_angles(z - hx, ang)
     xo, Po, _, _ = mixture_update(x, P, y, H, np.diagonal(R, axis1=-2, axis2=-1))
     return _Res(xo, Po, y)
 
@@ -114,17 +118,15 @@ def _reference_update(f: Any, st: Any, plots: Plots) -> dict[str, Any]:
             Xo, Po, _, _ = mixture_update(X, PP, y, H, r)
             ll, out = contaminated_loglik(y, H, PP, f.r, pat), big.astype(float)
         else:
-            it, c, thr = int(f._par[0]), f._par[1], f._par[2]
+            it = int(f._par[0])
+            thr = np.broadcast_to(f._thresholds(a["eps"])[:, None], y.shape)  # per channel
             zz = np.broadcast_to(z[:, None], hx.shape)
-            cfg = (
-                HuberConfig(c, it)
-                if f.rule == Rule.HUBER
-                else StudentTConfig(nu=c, iterations=it, flag_threshold=thr)
-            )
-            res, flags = reweighted_update(X, PP, zz, hx, H, f.R, f.r, cfg, False, _gauss_update)
-            Xo, Po, out = res.x, res.P, flags.astype(float)
-            sv = np.diagonal(H @ PP @ np.swapaxes(H, -1, -2), axis1=-2, axis2=-1) + f.r
-            ll = student_t_logpdf(y / np.sqrt(sv), f._par[3]) - 0.5 * np.log(sv).sum(-1)
+            huber = f.rule == Rule.HUBER
+            cfg = HuberConfig(1.0, it) if huber else StudentTConfig(nu=1.0, iterations=it)
+            object.__setattr__(cfg, "c" if huber else "nu", thr)  # per channel, past the check
+            res, _ = reweighted_update(X, PP, zz, hx, H, f.R, f.r, cfg, False, _gauss_update)
+            Xo, Po = res.x, res.P
+            _, _, ll, out = mixture_update(X, PP, y, H, f.r, pat)
         ll = np.where(ok[:, None], ll, 0.0)
         mu, x, P, tot = combine(Xo, Po, a["mu"], ll, np.arange(n))
         yc, S = f.innovation(st, plots)
@@ -142,8 +144,13 @@ _CASES = [
     (ContaminatedLevels, ContaminatedConfig(accel_levels=(0.1, 5.0), sojourn_times=(60.0, 10.0)),
      3, True),
     (RamazanovLevels, None, 2, False),
+    (RamazanovLevels, None, 2, True),
     (HuberLevels, None, 2, False),
+    (HuberLevels, None, 2, True),
+    (HuberLevels, HuberLevelsConfig(c=1.345), 2, False),
     (StudentTLevels, None, 2, False),
+    (StudentTLevels, None, 2, True),
+    (StudentTLevels, StudentTLevelsConfig(adapt_nu=False), 2, False),
 ]  # fmt: skip
 
 

@@ -39,11 +39,14 @@ the model probabilities:
 * ``ramazanov`` -- algorithm R's robust variance per channel (``r_c <- y_c^2 / Delta_c -
   (H P H^T)_cc`` when ``J_c = y_c^2 / S_cc > Delta_c``), likelihood the contaminated one;
 * ``huber`` -- Huber's IRLS update (:func:`seatrack.filters.robust_baselines.reweighted_update`
-  with a :class:`~seatrack.filters.robust_baselines.HuberConfig`), likelihood the Student-t
-  density of the whitened innovation components (see :class:`HuberLevels`);
+  with a :class:`~seatrack.filters.robust_baselines.HuberConfig`) whose threshold is, per
+  channel, Huber's minimax one for the channel's learnt outlier probability
+  (:func:`huber_minimax_threshold`), likelihood the contaminated one (see
+  :class:`HuberLevels`);
 * ``student-t`` -- the VB Student-t update (the same function with a
-  :class:`~seatrack.filters.robust_baselines.StudentTConfig`), likelihood the Student-t
-  density of each innovation component.
+  :class:`~seatrack.filters.robust_baselines.StudentTConfig`) whose degrees of freedom
+  follow, per channel, the learnt outlier probability (:func:`student_t_dof`), likelihood
+  the contaminated one.
 
 Every scan of a batch of tracks is three compiled calls (:mod:`seatrack.filters.levels_kernel`):
 mixing + prediction + combination; the polar prediction and the rule's update of every
@@ -59,13 +62,14 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from dataclasses import replace
 from typing import Any
 from typing import ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
 from numpy.typing import NDArray
-from scipy.special import gammaln
+from scipy.special import erfc
 
 from seatrack import kalman
 from seatrack.config import param
@@ -102,13 +106,16 @@ __all__ = [
     "LevelIMMConfig",
     "ContaminatedConfig",
     "RamazanovConfig",
+    "LearntOutliers",
+    "RangeRateWithoutClass",
     "HuberLevelsConfig",
     "StudentTLevelsConfig",
     "level_noise",
     "outlier_patterns",
     "mixture_update",
     "contaminated_loglik",
-    "student_t_logpdf",
+    "huber_minimax_threshold",
+    "student_t_dof",
     "LevelIMM",
     "ContaminatedLevels",
     "RamazanovLevels",
@@ -283,9 +290,44 @@ class ContaminatedConfig(OutlierConfig, LevelConfig):
 
 
 @dataclass(frozen=True)
-class RamazanovConfig(OutlierConfig, LevelConfig):
+class RangeRateWithoutClass:
+    """Mixin of the configurations that use the plots' range rate on the self-tuning ladder
+    but not with a target class (``robust``, ``huber``).
+
+    The class's two levels are far apart (a fighter: 0.5 and 88 m/s^2); the quiet one lags
+    in a manoeuvre, the robust update (algorithm R's redescending variance, Huber's bounded
+    weights) keeps its lagging state and the contaminated likelihood explains the lag as
+    outliers, while the precise range rate charges the agile level's wide covariance every
+    scan: the quiet level wins for tens of scans (one ``weave-fighter`` tuning run of
+    ``robust`` reached 6 km). Tuning seeds of ``benchmarks/defaults.py`` (12 runs),
+    ``+target`` rows with / without range rate: ``robust`` on ``fighter`` 150.6 / 145.4 m,
+    ``weave-fighter`` 355.7 / 229.2 m, ``ais-doppler`` 13.15 / 12.66 m; ``huber``
+    144.2 / 144.3, 245.6 / 219.2, 12.46 / 12.66 m. The ladder's intermediate rungs avoid it.
+    """
+
+    use_range_rate: bool = param(
+        True, doc="use the plots' range rate when they have one (not with a target class)"
+    )
+
+    @classmethod
+    def for_target(cls, target: TargetClass) -> Any:
+        """The class's levels (:meth:`LevelConfig.for_target`) without range rate."""
+        return replace(super().for_target(target), use_range_rate=False)  # type: ignore[misc]
+
+
+@dataclass(frozen=True)
+class RamazanovConfig(RangeRateWithoutClass, OutlierConfig, LevelConfig):
     """Parameters of ``--method robust`` (levels + algorithm R's robust variance; the
-    contaminated likelihood of the level probabilities with ``epsilon = 0.1``)."""
+    contaminated likelihood of the level probabilities with ``epsilon = 0.1``).
+
+    The plots' range rate is used (on the ladder, :class:`RangeRateWithoutClass`), with its
+    own threshold ``Delta`` = 6.63 (chi2 1 dof 99 %). Without range rate the level
+    probabilities of a 3-6 g fighter reached the agile levels (``q >= 1e2``) with mean
+    probability 0.33 over the first three scans of a turn, with it 0.84. Tuning seeds of
+    ``benchmarks/defaults.py`` (12 runs), position RMSE without range rate / with it at
+    ``Delta`` 3.84, 6.63, 10.8: ``fighter`` 153.5 / 128.7, 129.4, 130.2 m; ``ais-doppler``
+    13.32 / 13.57, 13.44, 13.43 m; ``weave-fighter`` 221.9 / 219.7, 220.1, 221.5 m
+    (docs/defaults.md)."""
 
     outlier_probability: float = param(
         0.1, doc="prior probability that a plot channel is an outlier", min=0, max=0.5,
@@ -295,28 +337,48 @@ class RamazanovConfig(OutlierConfig, LevelConfig):
                                exclusive_min=True)  # fmt: skip
     delta_bearing: float = param(3.84, doc="outlier threshold on J, bearing", min=0,
                                  exclusive_min=True)  # fmt: skip
+    delta_range_rate: float = param(6.63, doc="outlier threshold on J, range rate (chi2 99 %)",
+                                    min=0, exclusive_min=True)  # fmt: skip
 
 
 @dataclass(frozen=True)
-class HuberLevelsConfig(LevelConfig):
-    """Parameters of ``--method huber`` (levels + Huber IRLS update)."""
+class LearntOutliers(RangeRateWithoutClass, OutlierConfig):
+    """The plot noise of the reweighted rules (``huber``, ``student-t``): the
+    contaminated-Gaussian likelihood of the level probabilities, each channel's outlier
+    probability learnt over about 30 scans from 0.1 (as ``robust-adaptive``), which also
+    sets the rule's per-channel threshold; the plots' range rate on the ladder."""
 
-    c: float = param(1.345, doc="Huber threshold on the whitened residual", min=0,
-                     exclusive_min=True)  # fmt: skip
+    outlier_probability: float = redefault(OutlierConfig, "outlier_probability", 0.1)
+    outlier_memory: float = redefault(OutlierConfig, "outlier_memory", 30.0)
+
+
+@dataclass(frozen=True)
+class HuberLevelsConfig(LearntOutliers, LevelConfig):
+    """Parameters of ``--method huber`` (levels + Huber IRLS update, :class:`LearntOutliers`)."""
+
+    c: float = param(
+        0.0, doc="Huber threshold on the whitened residual (0: each channel's minimax "
+        "threshold for its learnt outlier probability)", min=0,
+    )  # fmt: skip
     iterations: int = param(2, doc="IRLS iterations (2-5 agree within 3 % on the tuning seeds)",
                             min=1)  # fmt: skip
-    level_nu: float = param(3.0, doc="Student-t degrees of freedom of the level likelihood",
-                            min=0, exclusive_min=True)  # fmt: skip
 
 
 @dataclass(frozen=True)
-class StudentTLevelsConfig(LevelConfig):
-    """Parameters of ``--method student-t`` (levels + VB Student-t update)."""
+class StudentTLevelsConfig(LearntOutliers, LevelConfig):
+    """Parameters of ``--method student-t`` (levels + VB Student-t update,
+    :class:`LearntOutliers`)."""
 
-    nu: float = param(3.0, doc="Student-t degrees of freedom", min=0, exclusive_min=True)
+    nu: float = param(
+        3.0, doc="Student-t degrees of freedom, the least of each channel's (student_t_dof)",
+        min=0, exclusive_min=True,
+    )  # fmt: skip
+    adapt_nu: bool = param(
+        True, doc="each channel's degrees of freedom from its learnt outlier probability "
+        "(false: nu on every channel)",
+    )  # fmt: skip
     iterations: int = param(2, doc="VB iterations (2-5 agree within 2 % on the tuning seeds)",
                             min=1)  # fmt: skip
-    flag_threshold: float = param(6.63, doc="outlier flag on E[e^2]/r (chi2 1 dof 99 %)", min=0)
 
 
 # ---------------------------------------------------------------------------
@@ -524,10 +586,8 @@ class LevelIMM(ConfiguredFilter, CartesianState):
         Xo, PPo, ll = np.empty_like(X), np.empty_like(PP), np.empty((B, M))
         o, Y, H = np.empty((B, M, m)), np.empty((B, M, m)), np.empty((B, M, m, n))
         level_update_core(X, PP, z, ok, s, self.d, self.range_rate, self.angular, self.r,
-                          self._rule, G, logp, k, self._par, Xo, PPo, ll, o, Y, H,
-                          *dims(n, m))  # fmt: skip
-        if self._rule >= Rule.HUBER.value:
-            ll = np.where(ok[:, None], self._level_loglik(Y, H, PP), 0.0)
+                          self._rule, G, logp, k, self._par, self._thresholds(a["eps"]), Xo,
+                          PPo, ll, o, Y, H, *dims(n, m))  # fmt: skip
         mu, x, P = np.empty((B, M)), np.empty((B, n)), np.empty((B, n, n))
         tot, outl, nis = np.empty(B), np.empty((B, m)), np.empty(B)
         level_combine_core(
@@ -540,13 +600,11 @@ class LevelIMM(ConfiguredFilter, CartesianState):
         aux |= self._after_update(state.replace(x=x, P=P, aux=aux))
         return finish_update(state, x, P, nis, tot, state.t, aux, ok)
 
-    def _level_loglik(self, y: FloatArray, H: FloatArray, P: FloatArray) -> FloatArray:
-        """Log-likelihoods ``(B, M)`` of the levels under the HUBER and STUDENT_T rules: the
-        Student-t density (``self._par[3]`` degrees of freedom) of each innovation
-        component ``y_c / sqrt((H P H^T)_cc + r_c)``."""
-        with np.errstate(all="ignore"):  # a bad plot gives NaN, rejected
-            s = np.diagonal(_hph(H, P), axis1=-2, axis2=-1) + self.r
-            return student_t_logpdf(y / np.sqrt(s), self._par[3]) - 0.5 * np.log(s).sum(-1)
+    def _thresholds(self, eps: FloatArray) -> FloatArray:
+        """The Huber thresholds or Student-t degrees of freedom ``(B, m)`` or ``(1, m)`` of
+        the channels with outlier probabilities ``eps (B, m)`` (the HUBER and STUDENT_T
+        rules; unused by the others)."""
+        return np.zeros((1, self.r.size))
 
     def _patterns(self, eps: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
         """The outlier patterns ``G (C, m)`` with each track's log priors ``(B, C)`` from its
@@ -642,49 +700,93 @@ class RamazanovLevels(LevelIMM):
     rule = Rule.RAMAZANOV
 
     def _rule_setup(self) -> None:
-        self._par = np.array([self.config.delta_range, self.config.delta_bearing])
+        c = self.config
+        rr = [c.delta_range_rate] if self.range_rate else []
+        self._par = np.array([c.delta_range, c.delta_bearing, *rr])
 
 
-def student_t_logpdf(u: FloatArray, nu: float) -> FloatArray:
-    """Log density of independent unit Student-t components ``u`` (summed over the last
-    axis), ``nu`` degrees of freedom."""
-    return np.asarray((_t_log_norm(nu) - 0.5 * (nu + 1) * np.log1p(u**2 / nu)).sum(-1))
-
-
-def _t_log_norm(nu: float) -> float:
-    """Log normaliser of the unit Student-t density with ``nu`` degrees of freedom."""
-    return float(gammaln((nu + 1) / 2) - gammaln(nu / 2) - 0.5 * math.log(nu * math.pi))
+def huber_minimax_threshold(eps: ArrayLike) -> FloatArray:
+    """Huber's minimax threshold ``c`` for contamination ``eps`` (0 < eps < 1): the root of
+    ``2 phi(c) / c - 2 Phi(-c) = eps / (1 - eps)`` (Huber 1964; ``eps`` 0.01 -> 1.945, 0.05
+    -> 1.398, 0.1 -> 1.140, 0.2 -> 0.862), by bisection on ``c`` in (1e-3, 10)."""
+    e = np.asarray(eps, dtype=float)
+    target = e / (1.0 - e)
+    lo, hi = np.full(e.shape, 1e-3), np.full(e.shape, 10.0)
+    for _ in range(48):  # the left side decreases in c; 2^-48 of the bracket
+        c = 0.5 * (lo + hi)
+        f = 2.0 * np.exp(-0.5 * c * c) / (math.sqrt(2.0 * math.pi) * c) - erfc(c / math.sqrt(2))
+        lo, hi = np.where(f > target, c, lo), np.where(f > target, hi, c)
+    return 0.5 * (lo + hi)
 
 
 class HuberLevels(LevelIMM):
     """``--method huber``: level IMM with Huber's IRLS update
     (:func:`seatrack.filters.robust_baselines.reweighted_update`, compiled in
-    :mod:`seatrack.filters.levels_kernel`); level likelihood Student-t (``level_nu``) of
-    the whitened innovation, not Huber's least favourable density: its Laplace tails let a
-    gross outlier vote ~7 nats for a level twice as wide (the IMM went agile, 20 m/s
-    velocity errors at 20 % contamination); log tails give ~2. Tuning seeds of
-    ``benchmarks/defaults.py``: 36.1 / 41.3 m -> 19.5 / 27.9 m on the contaminated sets,
-    0-5 % on the clean ones."""
+    :mod:`seatrack.filters.levels_kernel`) and the contaminated-Gaussian likelihood of
+    ``robust-adaptive``, whose per-channel outlier probabilities are learnt over about 30
+    scans and set each channel's Huber threshold to Huber's minimax one for that
+    contamination (:func:`huber_minimax_threshold`: 2.63 for a clean channel at the
+    learnt floor 1e-3, 0.86 at 20 %); the plots' range rate on the ladder.
+
+    Before, the threshold was 1.345 and the level likelihood the Student-t density (3
+    degrees of freedom) of the whitened innovation: its heavy tails treated the first
+    large innovations of a manoeuvre as outliers (the levels ``q >= 1e2`` had probability
+    0.32 over the first three scans of a fighter's turn, 0.84 now); with range rate that
+    version had 14.64 m on the tuning runs of ``ais-doppler`` (13.05 m without), and with
+    the learnt contaminated likelihood but the fixed threshold 13.29 m (12.71 m now;
+    docs/defaults.md)."""
 
     Config: ClassVar[type] = HuberLevelsConfig
     dims: ClassVar[tuple[int, ...]] = (2,)
     rule = Rule.HUBER
 
     def _rule_setup(self) -> None:
-        c = self.config
-        self._par = np.array([c.iterations, c.c, 0.0, c.level_nu, _t_log_norm(c.level_nu)])
+        self._par = np.array([float(self.config.iterations)])
+
+    def _thresholds(self, eps: FloatArray) -> FloatArray:
+        """The configured threshold on every channel, else the minimax ones of ``eps``."""
+        c = float(self.config.c)
+        if c > 0:
+            return np.full((1, self.r.size), c)
+        return np.ascontiguousarray(huber_minimax_threshold(eps))
+
+
+def student_t_dof(eps: ArrayLike, least: float) -> FloatArray:
+    """Degrees of freedom of a VB Student-t channel with outlier probability ``eps``:
+    ``max(least, 4 c^2 - 2)``, ``c`` = :func:`huber_minimax_threshold` -- the residual at
+    which the Student-t weight ``(nu + 1) / (nu + u^2)`` falls to one half
+    (``u^2 = nu + 2``) is the one at which Huber's minimax weight ``c / |u|`` does
+    (``|u| = 2 c``): 25.7 at the learnt floor 1e-3, 3.2 at 10 %, ``least`` at 20 %."""
+    c = huber_minimax_threshold(eps)
+    return np.maximum(least, 4.0 * c * c - 2.0)
 
 
 class StudentTLevels(LevelIMM):
     """``--method student-t``: level IMM with the VB Student-t update
     (:func:`seatrack.filters.robust_baselines.reweighted_update`, per channel, compiled in
-    :mod:`seatrack.filters.levels_kernel`); level likelihood the Student-t density of each
-    whitened innovation component."""
+    :mod:`seatrack.filters.levels_kernel`) and the contaminated-Gaussian likelihood of
+    ``robust-adaptive``, whose per-channel outlier probabilities are learnt over about 30
+    scans and set each channel's degrees of freedom (:func:`student_t_dof`); the plots'
+    range rate on the ladder.
+
+    Before, every channel had 3 degrees of freedom and the level likelihood was the
+    Student-t density of the whitened innovation: its heavy tails treated the first large
+    innovations of a manoeuvre as outliers (the levels ``q >= 1e2`` had probability 0.33
+    over the first three scans of a fighter's turn, 0.84 now); with range rate that
+    version had 16.63 m on the tuning runs of ``ais-doppler`` (13.17 m without), and with
+    the learnt contaminated likelihood but 3 degrees of freedom 14.04 m (12.85 m now;
+    docs/defaults.md)."""
 
     Config: ClassVar[type] = StudentTLevelsConfig
     dims: ClassVar[tuple[int, ...]] = (2,)
     rule = Rule.STUDENT_T
 
     def _rule_setup(self) -> None:
-        c = self.config
-        self._par = np.array([c.iterations, c.nu, c.flag_threshold, c.nu, _t_log_norm(c.nu)])
+        self._par = np.array([float(self.config.iterations)])
+
+    def _thresholds(self, eps: FloatArray) -> FloatArray:
+        """``nu`` on every channel, else each channel's :func:`student_t_dof`."""
+        nu = float(self.config.nu)
+        if not self.config.adapt_nu:
+            return np.full((1, self.r.size), nu)
+        return np.ascontiguousarray(student_t_dof(eps, nu))

@@ -7,8 +7,7 @@ One scan of the level IMM for a whole batch of tracks is three calls:
 * :func:`level_update_core` -- for every level: the polar ``h(x)`` and Jacobian, the
   wrapped innovation and the update of the level's rule (:class:`Rule`: the exact update
   under Gaussian or contaminated-Gaussian plot noise with its likelihood, algorithm R's
-  robust variance, or the Huber / Student-t iteratively reweighted update, whose
-  heavy-tailed level likelihood the caller evaluates);
+  robust variance, or the Huber / Student-t iteratively reweighted update);
 * :func:`level_combine_core` -- the level probabilities in log space, the combination,
   the channel outlier scores and the NIS of the combined prediction.
 
@@ -60,8 +59,8 @@ class Rule(IntEnum):
 
     MIXTURE = 0  #: exact update, Gaussian or contaminated-Gaussian plot noise
     RAMAZANOV = 1  #: algorithm R's robust variance; contaminated likelihood
-    HUBER = 2  #: Huber IRLS; Student-t level likelihood
-    STUDENT_T = 3  #: VB Student-t; Student-t level likelihood
+    HUBER = 2  #: Huber IRLS with per-channel thresholds; contaminated likelihood
+    STUDENT_T = 3  #: VB Student-t with per-channel degrees of freedom; contaminated likelihood
 
 
 def dims(n: int, m: int) -> tuple[tuple[float, ...], tuple[float, ...]]:
@@ -255,15 +254,14 @@ def _ramazanov(  # pragma: no cover - compiled
 
 @njit(cache=True)
 def _reweighted(  # pragma: no cover - compiled
-    x, P, y, H, r, rule, par, xo, Po, o, ws1, G1, lp1, k1, rw, e, tmp, dx, tn, tm
+    x, P, y, H, r, rule, par, thr, xo, Po, ws1, G1, lp1, k1, rw, e, tmp, dx, tn, tm
 ):
-    """Huber IRLS (``rule`` HUBER) or VB Student-t (STUDENT_T) update with the nominal
-    ``R = diag(r)``, ``par = [iterations, c or nu, flag threshold]``."""
+    """Huber IRLS (``rule`` HUBER, threshold ``thr[c]`` of each channel) or VB Student-t
+    (STUDENT_T, ``thr[c]`` degrees of freedom) update with the nominal ``R = diag(r)``,
+    ``par = [iterations]``."""
     m, n = H.shape
     huber = rule == 2
     iterations = int(par[0])
-    for a in range(m):
-        o[a] = 0.0
     if not huber:  # the VB iteration starts at the plain update
         mixture_item(P, y, H, r, G1, lp1, k1, dx, Po, tmp, ws1, tn, tm)
         for a in range(n):
@@ -283,17 +281,14 @@ def _reweighted(  # pragma: no cover - compiled
         if huber:
             for a in range(m):
                 u = abs(e[a]) / math.sqrt(r[a])
-                w = par[1] / (1e-300 if u < 1e-300 else u)
+                w = thr[a] / (1e-300 if u < 1e-300 else u)
                 w = 1.0 if w >= 1.0 else w  # NaN stays NaN, as np.minimum
-                o[a] = 1.0 if w < 1.0 else 0.0
                 rw[a] = r[a] / w
         else:
             _hph_diag(H, Po, tmp)
-            nu = par[1]
             for a in range(m):
                 aa = (e[a] * e[a] + tmp[a]) / r[a]
-                o[a] = 1.0 if aa > par[2] else 0.0
-                rw[a] = r[a] / ((nu + 1.0) / (nu + aa))
+                rw[a] = r[a] / ((thr[a] + 1.0) / (thr[a] + aa))
         mixture_item(P, y, H, rw, G1, lp1, k1, dx, Po, tmp, ws1, tn, tm)
         for a in range(n):
             xo[a] = x[a] + dx[a]
@@ -328,7 +323,8 @@ def _nis(x, P, z, s, d, rr, angular, r, hx, H, y, HP, A, S, L, w):  # pragma: no
 
 @njit(cache=True)
 def level_update_core(
-    X, PP, z, ok, s, d, rr, angular, r, rule, G, logp, k, par, Xo, PPo, ll, o, Y, Hs, tn, tm
+    X, PP, z, ok, s, d, rr, angular, r, rule, G, logp, k, par, thr, Xo, PPo, ll, o, Y, Hs, tn,
+    tm,
 ):  # pragma: no cover - compiled  # fmt: skip
     """The update of every level of every track.
 
@@ -338,11 +334,14 @@ def level_update_core(
     them), sensor ``s (B, 2d)``; ``angular (m,)`` 1 for the wrapped channels; nominal
     variances ``r (m,)``; the ``rule`` (:class:`Rule`), outlier patterns ``G (C, m)`` with
     per-track log priors ``logp (B, C)`` (or one row ``(1, C)`` for all) and scales
-    ``k (m,)``, the rule's parameters ``par``; ``tn``, ``tm`` = :func:`dims`.
+    ``k (m,)``, the rule's parameters ``par`` and the Huber thresholds / Student-t degrees
+    of freedom of each track's channels ``thr (B, m)`` (or one row for all; unused by the
+    other rules); ``tn``, ``tm`` = :func:`dims`.
 
-    Outputs: updated levels ``Xo``, ``PPo``, their log-likelihoods ``ll (B, M)`` (zero for
-    unusable plots; not written by the HUBER and STUDENT_T rules, whose density the caller
-    evaluates on ``Y`` and ``Hs``), channel outlier scores ``o (B, M, m)``, the wrapped
+    Outputs: updated levels ``Xo``, ``PPo``, their log-likelihoods ``ll (B, M)`` (the
+    contaminated-Gaussian one of the nominal ``r`` for every rule; zero for unusable
+    plots), channel outlier scores ``o (B, M, m)`` (algorithm R's flags under RAMAZANOV,
+    else the posterior outlier probabilities of the contaminated model), the wrapped
     innovations ``Y (B, M, m)`` and the Jacobians ``Hs (B, M, m, n)``.
     """
     B, M, n = X.shape
@@ -362,6 +361,7 @@ def level_update_core(
     Ps = np.empty((n, n))
     for b in range(B):
         lp = logp[b if logp.shape[0] > 1 else 0]
+        th = thr[b if thr.shape[0] > 1 else 0]
         for j in range(M):
             sr[j] = s[b]
         H = Hs[b]
@@ -383,9 +383,10 @@ def level_update_core(
                 v = _ramazanov(X[b, j], PP[b, j], y, H[j], r, G, lp, k, par, Xo[b, j], PPo[b, j],
                                o[b, j], ws, ws1, G1, lp1, k1, rw, tmp, dx, Ps, tn, tm)  # fmt: skip
             else:
-                _reweighted(X[b, j], PP[b, j], y, H[j], r, rule, par, Xo[b, j], PPo[b, j],
-                            o[b, j], ws1, G1, lp1, k1, rw, e, tmp, dx, tn, tm)  # fmt: skip
-                continue
+                _reweighted(X[b, j], PP[b, j], y, H[j], r, rule, par, th, Xo[b, j], PPo[b, j],
+                            ws1, G1, lp1, k1, rw, e, tmp, dx, tn, tm)  # fmt: skip
+                # the contaminated likelihood and outlier probabilities (nominal r)
+                v = mixture_item(PP[b, j], y, H[j], r, G, lp, k, dx, Ps, o[b, j], ws, tn, tm)
             ll[b, j] = v if ok[b] else 0.0
 
 

@@ -27,11 +27,9 @@ from seatrack.filters.levels import LevelConfig
 from seatrack.filters.levels import LevelIMM
 from seatrack.filters.levels import LevelIMMConfig
 from seatrack.filters.levels import contaminated_loglik
-from seatrack.filters.levels import huber_minimax_threshold
 from seatrack.filters.levels import level_noise
 from seatrack.filters.levels import mixture_update
 from seatrack.filters.levels import outlier_patterns
-from seatrack.filters.levels import student_t_dof
 from seatrack.models.motion import cv_transition
 from seatrack.models.targets import AIRCRAFT
 from seatrack.models.targets import SHIP
@@ -195,29 +193,6 @@ def test_equal_times_predict_changes_nothing():
     st = f.initiate([5.0], x, P)
     same = f.predict(st, [5.0])
     assert np.array_equal(same.x, st.x) and np.array_equal(same.aux["mu"], st.aux["mu"])
-
-
-def test_huber_minimax_threshold_solves_huber_equation():
-    """Huber (1964): 2 phi(c) / c - 2 Phi(-c) = eps / (1 - eps); his table's values."""
-    eps = np.array([1e-3, 0.01, 0.05, 0.1, 0.2, 0.4])
-    c = huber_minimax_threshold(eps)
-    lhs = 2 * stats.norm.pdf(c) / c - 2 * stats.norm.cdf(-c)
-    np.testing.assert_allclose(lhs, eps / (1 - eps), rtol=1e-9)
-    np.testing.assert_allclose(c[1:5], [1.945, 1.398, 1.140, 0.862], atol=1e-3)
-    assert np.all(np.diff(c) < 0)
-    assert huber_minimax_threshold(np.full((2, 3), 0.1)).shape == (2, 3)
-
-
-def test_student_t_dof_halves_the_weight_where_huber_does():
-    """The Student-t weight (nu + 1) / (nu + u^2) and Huber's c / |u| are 1/2 at the same
-    residual, the degrees of freedom never below the floor."""
-    eps = np.array([1e-3, 0.01, 0.1, 0.2])
-    nu = student_t_dof(eps, 0.5)
-    c = huber_minimax_threshold(eps)
-    u = 2 * c  # Huber's weight is 1/2 there
-    np.testing.assert_allclose((nu + 1) / (nu + u**2), 0.5, rtol=1e-12)
-    assert student_t_dof(np.array([0.2]), 3.0)[0] == 3.0
-    assert student_t_dof(np.array([1e-3]), 3.0)[0] == pytest.approx(25.73, abs=0.01)
 
 
 @pytest.mark.parametrize("name", ["robust", "huber", "student-t"])

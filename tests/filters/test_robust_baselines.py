@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from scipy import stats
 
 from seatrack.evaluate.metrics import position_error
 from seatrack.filters.robust import SonarModel
@@ -13,6 +14,9 @@ from seatrack.filters.robust_baselines import StudentTConfig
 from seatrack.filters.robust_baselines import clairvoyant_filter
 from seatrack.filters.robust_baselines import ekf_filter
 from seatrack.filters.robust_baselines import huber_filter
+from seatrack.filters.robust_baselines import huber_minimax_threshold
+from seatrack.filters.robust_baselines import minimax_threshold_table
+from seatrack.filters.robust_baselines import student_t_dof
 from seatrack.filters.robust_baselines import student_t_filter
 from seatrack.simulate.marine import MarineScenario
 from seatrack.simulate.marine import SonarRuns
@@ -198,3 +202,36 @@ def test_bad_configs_raise() -> None:
         StudentTConfig(nu=-1.0)
     with pytest.raises(ValueError, match="iterations"):
         StudentTConfig(iterations=0)
+
+
+def test_huber_minimax_threshold_solves_huber_equation():
+    """Huber (1964): 2 phi(c) / c - 2 Phi(-c) = eps / (1 - eps); his table's values."""
+    eps = np.array([1e-3, 0.01, 0.05, 0.1, 0.2, 0.4])
+    c = huber_minimax_threshold(eps)
+    lhs = 2 * stats.norm.pdf(c) / c - 2 * stats.norm.cdf(-c)
+    np.testing.assert_allclose(lhs, eps / (1 - eps), rtol=1e-9)
+    np.testing.assert_allclose(c[1:5], [1.945, 1.398, 1.140, 0.862], atol=1e-3)
+    assert np.all(np.diff(c) < 0)
+    assert huber_minimax_threshold(np.full((2, 3), 0.1)).shape == (2, 3)
+
+
+def test_minimax_threshold_table_is_the_bisection():
+    eps = np.exp(np.random.default_rng(3).uniform(np.log(1e-4), np.log(0.5), 5000))
+    err = np.abs(minimax_threshold_table(eps) - huber_minimax_threshold(eps))
+    assert err.max() < 2e-6
+    assert minimax_threshold_table(np.full((2, 3), 0.1)).shape == (2, 3)
+    ends = minimax_threshold_table([1e-4, 0.5])
+    np.testing.assert_array_equal(minimax_threshold_table([1e-9, 0.9]), ends)  # clipped
+    assert ends[0] > ends[1]
+
+
+def test_student_t_dof_halves_the_weight_where_huber_does():
+    """The Student-t weight (nu + 1) / (nu + u^2) and Huber's c / |u| are 1/2 at the same
+    residual, the degrees of freedom never below the floor."""
+    eps = np.array([1e-3, 0.01, 0.1, 0.2])
+    nu = student_t_dof(eps, 0.5)
+    c = minimax_threshold_table(eps)
+    u = 2 * c  # Huber's weight is 1/2 there
+    np.testing.assert_allclose((nu + 1) / (nu + u**2), 0.5, rtol=1e-12)
+    assert student_t_dof(np.array([0.2]), 3.0)[0] == 3.0
+    assert student_t_dof(np.array([1e-3]), 3.0)[0] == pytest.approx(25.73, abs=0.01)

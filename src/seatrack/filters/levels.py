@@ -41,8 +41,8 @@ the model probabilities:
 * ``huber`` -- Huber's IRLS update (:func:`seatrack.filters.robust_baselines.reweighted_update`
   with a :class:`~seatrack.filters.robust_baselines.HuberConfig`) whose threshold is, per
   channel, Huber's minimax one for the channel's learnt outlier probability
-  (:func:`huber_minimax_threshold`), likelihood the contaminated one (see
-  :class:`HuberLevels`);
+  (:func:`seatrack.filters.robust_baselines.huber_minimax_threshold`), likelihood the
+  contaminated one (see :class:`HuberLevels`);
 * ``student-t`` -- the VB Student-t update (the same function with a
   :class:`~seatrack.filters.robust_baselines.StudentTConfig`) whose degrees of freedom
   follow, per channel, the learnt outlier probability (:func:`student_t_dof`), likelihood
@@ -69,7 +69,6 @@ from typing import ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 from numpy.typing import NDArray
-from scipy.special import erfc
 
 from seatrack import kalman
 from seatrack.config import param
@@ -92,6 +91,8 @@ from seatrack.filters.levels_kernel import level_combine_core
 from seatrack.filters.levels_kernel import level_predict_core
 from seatrack.filters.levels_kernel import level_update_core
 from seatrack.filters.levels_kernel import mixture_core
+from seatrack.filters.robust_baselines import minimax_threshold_table
+from seatrack.filters.robust_baselines import student_t_dof
 from seatrack.models.measurement import polar_measurement
 from seatrack.models.motion import ALONG_TRACK_RATIO
 from seatrack.models.motion import cv_matrices
@@ -114,8 +115,6 @@ __all__ = [
     "outlier_patterns",
     "mixture_update",
     "contaminated_loglik",
-    "huber_minimax_threshold",
-    "student_t_dof",
     "LevelIMM",
     "ContaminatedLevels",
     "RamazanovLevels",
@@ -705,20 +704,6 @@ class RamazanovLevels(LevelIMM):
         self._par = np.array([c.delta_range, c.delta_bearing, *rr])
 
 
-def huber_minimax_threshold(eps: ArrayLike) -> FloatArray:
-    """Huber's minimax threshold ``c`` for contamination ``eps`` (0 < eps < 1): the root of
-    ``2 phi(c) / c - 2 Phi(-c) = eps / (1 - eps)`` (Huber 1964; ``eps`` 0.01 -> 1.945, 0.05
-    -> 1.398, 0.1 -> 1.140, 0.2 -> 0.862), by bisection on ``c`` in (1e-3, 10)."""
-    e = np.asarray(eps, dtype=float)
-    target = e / (1.0 - e)
-    lo, hi = np.full(e.shape, 1e-3), np.full(e.shape, 10.0)
-    for _ in range(48):  # the left side decreases in c; 2^-48 of the bracket
-        c = 0.5 * (lo + hi)
-        f = 2.0 * np.exp(-0.5 * c * c) / (math.sqrt(2.0 * math.pi) * c) - erfc(c / math.sqrt(2))
-        lo, hi = np.where(f > target, c, lo), np.where(f > target, hi, c)
-    return 0.5 * (lo + hi)
-
-
 class HuberLevels(LevelIMM):
     """``--method huber``: level IMM with Huber's IRLS update
     (:func:`seatrack.filters.robust_baselines.reweighted_update`, compiled in
@@ -748,17 +733,7 @@ class HuberLevels(LevelIMM):
         c = float(self.config.c)
         if c > 0:
             return np.full((1, self.r.size), c)
-        return np.ascontiguousarray(huber_minimax_threshold(eps))
-
-
-def student_t_dof(eps: ArrayLike, least: float) -> FloatArray:
-    """Degrees of freedom of a VB Student-t channel with outlier probability ``eps``:
-    ``max(least, 4 c^2 - 2)``, ``c`` = :func:`huber_minimax_threshold` -- the residual at
-    which the Student-t weight ``(nu + 1) / (nu + u^2)`` falls to one half
-    (``u^2 = nu + 2``) is the one at which Huber's minimax weight ``c / |u|`` does
-    (``|u| = 2 c``): 25.7 at the learnt floor 1e-3, 3.2 at 10 %, ``least`` at 20 %."""
-    c = huber_minimax_threshold(eps)
-    return np.maximum(least, 4.0 * c * c - 2.0)
+        return np.ascontiguousarray(minimax_threshold_table(eps))
 
 
 class StudentTLevels(LevelIMM):

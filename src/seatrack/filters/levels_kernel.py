@@ -89,6 +89,64 @@ def mixture_work(n, m, C):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
+def _hph_into(P, H, ws):  # pragma: no cover - compiled
+    """``P H^T`` and ``H P H^T`` into the scratch ``ws`` of :func:`mixture_work`; returns
+    the latter."""
+    matmul_core(P, H.T, ws[0])
+    matmul_core(H, ws[0], ws[1])
+    return ws[1]
+
+
+@njit(cache=True)
+def _pattern_factor(HPH, r, k, Gg, S, L, m):  # pragma: no cover - compiled
+    """Cholesky factor ``L`` of ``S = sym(H P H^T) + diag(r * k^Gg)`` (outlier pattern
+    ``Gg (m,)``); returns ``log det S`` (NaN when not positive definite)."""
+    for a in range(m):
+        for c in range(m):
+            S[a, c] = 0.5 * (HPH[a, c] + HPH[c, a])
+        S[a, a] += r[a] * (k[a] if Gg[a] > 0.0 else 1.0)
+    return cholesky_m(S, L, m)
+
+
+@njit(cache=True)
+def _log_sum_exp(lw):  # pragma: no cover - compiled
+    """``log sum exp(lw)`` of a finite vector, shifted by its maximum."""
+    top = lw.max()
+    tot = 0.0
+    for g in range(lw.size):
+        tot += math.exp(lw[g] - top)
+    return top + math.log(tot)
+
+
+@njit(cache=True)
+def mixture_loglik(P, y, H, r, G, logp, k, pout, ws, tm):  # pragma: no cover - compiled
+    """The log-likelihood and the posterior channel outlier probabilities ``pout`` of
+    :func:`mixture_item`, without its update: per pattern one ``m x m`` factorisation and
+    one forward solve (``|L^-1 y|^2``), no inverse and no gain. NaN when an ``S_g`` is not
+    positive definite (``pout`` unset)."""
+    HPH, S, L, lw, ub = _hph_into(P, H, ws), ws[2], ws[3], ws[6], ws[8]
+    m = len(tm)
+    C = G.shape[0]
+    for g in range(C):
+        logdet = _pattern_factor(HPH, r, k, G[g], S, L, m)
+        if not logdet == logdet:
+            return np.nan
+        forward_m(L, y, ub, m)
+        q = 0.0
+        for a in range(m):
+            q += ub[a] * ub[a]
+        lw[g] = logp[g] - 0.5 * (q + logdet + m * _LOG_2PI)
+    lse = _log_sum_exp(lw)
+    for a in range(m):
+        pout[a] = 0.0
+    for g in range(C):
+        w = math.exp(lw[g] - lse)
+        for a in range(m):
+            pout[a] += w * G[g, a]
+    return lse
+
+
+@njit(cache=True)
 def mixture_item(P, y, H, r, G, logp, k, dx, Po, pout, ws, tn, tm):  # pragma: no cover
     """Update of one Gaussian ``(x, P)`` on the innovation ``y`` under plot noise that is,
     per pattern ``g``, ``N(0, diag(r * k^G_g))`` with prior ``exp(logp_g)``.
@@ -111,11 +169,7 @@ def mixture_item(P, y, H, r, G, logp, k, dx, Po, pout, ws, tn, tm):  # pragma: n
     matmul_core(P, H.T, PHt)
     matmul_core(H, PHt, HPH)
     for g in range(C):
-        for a in range(m):
-            for c in range(m):
-                S[a, c] = 0.5 * (HPH[a, c] + HPH[c, a])
-            S[a, a] += r[a] * (k[a] if G[g, a] > 0.0 else 1.0)
-        logdet = cholesky_m(S, L, m)
+        logdet = _pattern_factor(HPH, r, k, G[g], S, L, m)
         if not logdet == logdet:
             for a in range(n):
                 dx[a] = np.nan
@@ -137,11 +191,7 @@ def mixture_item(P, y, H, r, G, logp, k, dx, Po, pout, ws, tn, tm):  # pragma: n
             u[g, a] = v
             q += y[a] * v
         lw[g] = logp[g] - 0.5 * (q + logdet + m * _LOG_2PI)
-    top = lw.max()
-    tot = 0.0
-    for g in range(C):
-        tot += math.exp(lw[g] - top)
-    lse = top + math.log(tot)
+    lse = _log_sum_exp(lw)
     for a in range(m):
         ub[a] = 0.0
         pout[a] = 0.0
@@ -235,7 +285,7 @@ def _hph_diag(H, P, out):  # pragma: no cover - compiled
 
 @njit(cache=True)
 def _ramazanov(  # pragma: no cover - compiled
-    x, P, y, H, r, G, logp, k, par, xo, Po, o, ws, ws1, G1, lp1, k1, rw, tmp, dx, Ps, tn, tm
+    x, P, y, H, r, G, logp, k, par, xo, Po, o, ws, ws1, G1, lp1, k1, rw, tmp, tn, tm
 ):
     """Algorithm R's robust variance per channel, then the Gaussian update; returns the
     contaminated log-likelihood (nominal ``r``). ``par = [Delta_c]``."""
@@ -249,7 +299,46 @@ def _ramazanov(  # pragma: no cover - compiled
     mixture_item(P, y, H, rw, G1, lp1, k1, xo, Po, tmp, ws1, tn, tm)
     for a in range(n):
         xo[a] = x[a] + xo[a]
-    return mixture_item(P, y, H, r, G, logp, k, dx, Ps, tmp, ws, tn, tm)
+    return mixture_loglik(P, y, H, r, G, logp, k, tmp, ws, tm)
+
+
+@njit(cache=True)
+def _measurement_step(M, y, w, e, hpo, S, L, t, v, tm):  # pragma: no cover - compiled
+    """The residual ``e = y - M S^-1 y`` and ``hpo = diag(M - M S^-1 M)`` of a Kalman update
+    with plot noise ``diag(w)``, ``S = M + diag(w)``, from ``M = H P H^T`` alone: the
+    update's ``y - H dx`` and ``diag(H P+ H^T)`` without the state (``t``, ``v``: scratch);
+    NaN when ``S`` is not positive definite; ``tm``: :func:`dims` (``m`` a constant)."""
+    m = len(tm)
+    for a in range(m):
+        for c in range(m):
+            S[a, c] = 0.5 * (M[a, c] + M[c, a])
+        S[a, a] += w[a]
+    logdet = cholesky_m(S, L, m)
+    if not logdet == logdet:  # not positive definite: the update is NaN, as mixture_item's
+        for a in range(m):
+            e[a] = np.nan
+            hpo[a] = np.nan
+        return
+    for col in range(m + 1):  # S^-1 y, then S^-1 M[:, col - 1]
+        for a in range(m):
+            t[a] = y[a] if col == 0 else M[a, col - 1]
+        forward_m(L, t, v, m)
+        for a in range(m - 1, -1, -1):  # back substitution, L^T
+            s = v[a]
+            for b in range(a + 1, m):
+                s -= L[b, a] * v[b]
+            v[a] = s / L[a, a]
+        if col == 0:
+            for a in range(m):
+                s = 0.0
+                for b in range(m):
+                    s += M[a, b] * v[b]
+                e[a] = y[a] - s
+        else:
+            s = 0.0
+            for b in range(m):
+                s += M[b, col - 1] * v[b]
+            hpo[col - 1] = M[col - 1, col - 1] - s
 
 
 @njit(cache=True)
@@ -258,40 +347,35 @@ def _reweighted(  # pragma: no cover - compiled
 ):
     """Huber IRLS (``rule`` HUBER, threshold ``thr[c]`` of each channel) or VB Student-t
     (STUDENT_T, ``thr[c]`` degrees of freedom) update with the nominal ``R = diag(r)``,
-    ``par = [iterations]``."""
-    m, n = H.shape
+    ``par = [iterations]``. The iterations between the weights run in plot space
+    (:func:`_measurement_step` on ``H P H^T``); only the last weights update the state."""
+    n = len(tn)
+    m = len(tm)
     huber = rule == 2
     iterations = int(par[0])
-    if not huber:  # the VB iteration starts at the plain update
-        mixture_item(P, y, H, r, G1, lp1, k1, dx, Po, tmp, ws1, tn, tm)
-        for a in range(n):
-            xo[a] = x[a] + dx[a]
+    PHt, M, S, L, t, v = ws1[0], ws1[1], ws1[2], ws1[3], ws1[7], ws1[8]
+    matmul_core(P, H.T, PHt)
+    matmul_core(H, PHt, M)
+    if huber:  # the first Huber weights come from the innovation itself
+        for a in range(m):
+            e[a] = y[a]
+    else:  # the VB iteration starts at the plain update
+        _measurement_step(M, y, r, e, tmp, S, L, t, v, tm)
     for it in range(iterations):
-        if huber and it == 0:
-            for a in range(m):
-                e[a] = y[a]
-        else:
-            for a in range(n):
-                dx[a] = xo[a] - x[a]
-            for a in range(m):
-                v = 0.0
-                for b in range(n):
-                    v += H[a, b] * dx[b]
-                e[a] = y[a] - v
-        if huber:
-            for a in range(m):
+        if it > 0:
+            _measurement_step(M, y, rw, e, tmp, S, L, t, v, tm)
+        for a in range(m):
+            # the variances r / w of the weights, written without dividing by a weight
+            # (an infinite residual of a 1e308 plot makes it 0 and the variance infinite)
+            if huber:  # w = min(1, c / |u|); a NaN residual stays NaN
                 u = abs(e[a]) / math.sqrt(r[a])
-                w = thr[a] / (1e-300 if u < 1e-300 else u)
-                w = 1.0 if w >= 1.0 else w  # NaN stays NaN, as np.minimum
-                rw[a] = r[a] / w
-        else:
-            _hph_diag(H, Po, tmp)
-            for a in range(m):
+                rw[a] = r[a] if u <= thr[a] else r[a] * (u / thr[a])
+            else:  # w = (nu + 1) / (nu + E[e^2] / r)
                 aa = (e[a] * e[a] + tmp[a]) / r[a]
-                rw[a] = r[a] / ((thr[a] + 1.0) / (thr[a] + aa))
-        mixture_item(P, y, H, rw, G1, lp1, k1, dx, Po, tmp, ws1, tn, tm)
-        for a in range(n):
-            xo[a] = x[a] + dx[a]
+                rw[a] = r[a] * ((thr[a] + aa) / (thr[a] + 1.0))
+    mixture_item(P, y, H, rw, G1, lp1, k1, dx, Po, tmp, ws1, tn, tm)
+    for a in range(n):
+        xo[a] = x[a] + dx[a]
 
 
 @njit(cache=True)
@@ -358,7 +442,6 @@ def level_update_core(
     e = np.empty(m)
     tmp = np.empty(m)
     dx = np.empty(n)
-    Ps = np.empty((n, n))
     for b in range(B):
         lp = logp[b if logp.shape[0] > 1 else 0]
         th = thr[b if thr.shape[0] > 1 else 0]
@@ -381,12 +464,12 @@ def level_update_core(
                     Xo[b, j, a] = X[b, j, a] + Xo[b, j, a]
             elif rule == 1:
                 v = _ramazanov(X[b, j], PP[b, j], y, H[j], r, G, lp, k, par, Xo[b, j], PPo[b, j],
-                               o[b, j], ws, ws1, G1, lp1, k1, rw, tmp, dx, Ps, tn, tm)  # fmt: skip
+                               o[b, j], ws, ws1, G1, lp1, k1, rw, tmp, tn, tm)  # fmt: skip
             else:
                 _reweighted(X[b, j], PP[b, j], y, H[j], r, rule, par, th, Xo[b, j], PPo[b, j],
                             ws1, G1, lp1, k1, rw, e, tmp, dx, tn, tm)  # fmt: skip
                 # the contaminated likelihood and outlier probabilities (nominal r)
-                v = mixture_item(PP[b, j], y, H[j], r, G, lp, k, dx, Ps, o[b, j], ws, tn, tm)
+                v = mixture_loglik(PP[b, j], y, H[j], r, G, lp, k, o[b, j], ws, tm)
             ll[b, j] = v if ok[b] else 0.0
 
 

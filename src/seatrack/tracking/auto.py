@@ -70,8 +70,8 @@ P_START = 0.9
 AUTO_NOISE: dict[str, str] = {
     "ekf": "levels",  # 180.2 / 181.2 / 152.1 (its default q = 1 suits no target class)
     "ekf-rb": "wrap",  # 177.3 / 152.2: its sonar q (0.02 m/s^2) needs the manoeuvre level
-    "huber": "own",  # 157.0 / 157.0: a level IMM already (wrap is void)
-    "student-t": "own",  # 159.3 / 159.3: idem
+    "huber": "own",  # 156.6 / 156.6: a level IMM already (wrap is void)
+    "student-t": "own",  # 155.9 / 155.9: idem
     "robust": "own",  # 156.6 / 156.6: idem
     "robust-adaptive": "own",  # 155.8 / 155.8: idem
     "turning": "own",  # 155.5 / 155.5: idem

@@ -58,6 +58,13 @@ def test_position_crb_applies_only_to_cv_gaussian_scenarios():
     doc["sensors"] = [dict(CV["sensors"][0], epsilon=0.1, outlier_scale=10.0)]
     assert position_crb(parse_scenario(doc, "eps.toml")) is None
     assert position_crb(load_scenario(bundled_scenario("linear_cv"))) is not None
+    # a target starting on the sensor: the bearing (and its information) is undefined there;
+    # no bound rather than a failed evaluation ("matrix has non-finite entries" before)
+    doc = dict(CV, targets=[dict(CV["targets"][0], position_m=[0.0, 0.0])])
+    sc = parse_scenario(doc, "on.toml")
+    assert position_crb(sc) is None
+    (row,) = summarize(compare_methods(sc, ["ekf"], runs=2, seed=1), ["ekf"], crb=None)
+    assert row["failures"] == 0
 
 
 def test_method_config_and_sensor_choice():

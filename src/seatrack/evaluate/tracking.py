@@ -251,7 +251,8 @@ def position_crb(scenario: Scenario, sensor: str | None = None) -> FloatArray | 
     ndarray (targets, scans) or None
         ``sqrt(trace)`` of the position block (m; NaN while not yet observable), or None
         when the bound does not apply: a target manoeuvres, the noise is contaminated
-        (``epsilon > 0``), or a 2-D sensor sees height differences.
+        (``epsilon > 0``), a 2-D sensor sees height differences, or a target is on the
+        sensor at a scan (its bearing, and the information, undefined).
     """
     from seatrack.evaluate.bounds import crb_deterministic
     from seatrack.models.measurement import RangeBearing
@@ -291,7 +292,10 @@ def position_crb(scenario: Scenario, sensor: str | None = None) -> FloatArray | 
         if d == 2 and np.any(tr.pos[:, 2] != spos[:, 2]):
             return None  # slant range of a 2-D sensor: the 2-D model does not apply
         x = np.concatenate([tr.pos[:, :d], tr.vel[:, :d]], axis=-1)
-        H = model.jacobian(x, sensor_state)  # (scans, m, 2d)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            H = model.jacobian(x, sensor_state)  # (scans, m, 2d)
+        if not np.isfinite(H).all():
+            return None  # a target on the sensor: the bearing and its information undefined
         info = s.p_detect * np.einsum("kji,jl,klm->kim", H, Ri, H)
         bound = crb_deterministic(info, F)
         out.append(np.sqrt(np.trace(bound[:, :d, :d], axis1=-2, axis2=-1)))

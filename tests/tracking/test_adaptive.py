@@ -146,9 +146,9 @@ def test_along_track_extra_noise_is_shaped_by_the_velocity():
     P = np.broadcast_to(np.diag([100.0, 100.0, 1.0, 1.0]), (2, 4, 4)).copy()
     outer = TrackState.new(np.zeros(2), x, P)
     zero = np.zeros((4, 4, 4))  # B * M = 2 tracks x 2 levels
-    dt = np.full(4, 2.0)
-    Qs = shaped._extra_noise(zero, dt, 2, outer)
-    Qi = iso._extra_noise(zero, dt, 2, outer)
+    dt = np.full(2, 2.0)  # one interval a track
+    Qs = shaped._extra_noise(zero, dt, outer)
+    Qi = iso._extra_noise(zero, dt, outer)
     np.testing.assert_allclose(Qi[1], cv_noise(2.0, 2.0, 2))
     np.testing.assert_allclose(Qs[0], 0.0)  # the first level has no extra noise
     # track 0 (level 1): along x (East) 0.3 x, across (North) as the isotropic level

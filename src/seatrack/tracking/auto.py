@@ -44,6 +44,9 @@ __all__ = [
     "STRAIGHT_ACCEL",
     "P_SWITCH",
     "P_START",
+    "TURN_RATE",
+    "TURN_ACCEL",
+    "TURN_THRESHOLD",
     "AUTO_NOISE",
     "NOISE_KEYS",
     "scan_period",
@@ -63,6 +66,14 @@ P_SWITCH = 0.01
 #: probability that a new track starts in the straight-leg level (ships sail straight most
 #: of the time; tuning scenarios: 0.5 / 0.8 / 0.9 / 0.95 -> 152.6 / 152.2 / 152.1 / 152.2 m)
 P_START = 0.9
+
+#: turn rate of the coordinated-turn models of the noise IMM (one each way), deg/s; 0: none
+TURN_RATE = 0.0
+#: white-noise acceleration of the turn models, m/s^2 (their PSD ``a^2 T``)
+TURN_ACCEL = 0.15
+#: a track evaluates its turn models while the probability that it is off the straight-leg
+#: level exceeds this (:class:`~seatrack.tracking.adaptive.NoiseLevels` ``turn_threshold``)
+TURN_THRESHOLD = 0.0
 
 #: automatic process noise of each registered method (see the module docstring), from the
 #: mean GOSPA (m) on the tuning scenarios given only the sensor noise, own / wrap [/ levels]
@@ -153,8 +164,16 @@ def per_track_filter(
         m = build(name, tab, d=d, range_rate=range_rate, source=source)
     if how == "own":
         return m, how
-    extra = q_m - (q_s if how == "levels" else 0.0)
+    own = q_s if how == "levels" else 0.0
+    w = np.radians(TURN_RATE)
     levels = NoiseLevels(
-        m.filter, (0.0, extra), P_SWITCH, along_track_ratio=ALONG_TRACK_RATIO, start=P_START
+        m.filter,
+        (0.0, q_m - own),
+        P_SWITCH,
+        along_track_ratio=ALONG_TRACK_RATIO,
+        start=P_START,
+        turn_rates=(w, -w) if w > 0 else (),
+        turn_noise=max(TURN_ACCEL**2 * period - own, 0.0),
+        turn_threshold=TURN_THRESHOLD,
     )
     return dataclasses.replace(m, filter=levels), how

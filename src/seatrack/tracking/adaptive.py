@@ -21,11 +21,26 @@ Mixing and combination are the compiled kernels of the IMM engine
 (:func:`seatrack.filters.imm.mix`, :func:`~seatrack.filters.imm.combine`); every model of
 every track goes through the wrapped filter in one batched call.
 
+Optional coordinated-turn models (``turn_rates``, rad/s, usually ``(w, -w)``) follow the
+``L`` levels: the filter's prediction with extra PSD ``turn_noise``, then the linear map
+``G = F_ct(w, T) F_cv(T)^-1 = [[I, S - T I], [0, R(w T)]]`` on the x-y positions and
+velocities (``S`` the turn's position-from-velocity block, ``R`` the rotation), so the
+model turns a constant-velocity prediction into a coordinated turn in the same state
+(``x <- G x``, ``P <- G P G^T``; a compiled kernel). The structure is variable: a track
+evaluates its turn models only while ``1 - mu_0`` (off the first level) exceeds
+``turn_threshold``; the others run the levels alone -- their turn probabilities set to zero
+(the levels renormalised) and the levels' own chain -- and their turn models are not
+computed: the needed models of all tracks are indexed out, predicted or updated in one call
+of the filter and put back, a model not computed holding a copy of the track's last level
+(a finite placeholder of probability zero). With ``turn_threshold`` 0 every track runs every
+model. A model of predicted probability zero is skipped in the update alike.
+
 The model states live in ``aux["noise_models"]`` (one nested TrackState whose arrays are
 ``(B, M, ...)``: the models stacked on a second axis) and the model probabilities in
 ``aux["noise_mu"]``; the ``manoeuvre`` output column is the probability of the high-noise
-model. The switching probability per scan ``p_switch`` makes the transition matrix
-``[[1 - p, p], [p, 1 - p]]``. A new track starts in the first (lowest) model with
+level and the turn models. The switching probability per scan ``p_switch`` makes the
+transition matrix ``[[1 - p, p], [p, 1 - p]]`` (``M`` models: stay ``1 - p``, any other
+``p / (M - 1)``). A new track starts in the first (lowest) model with
 probability ``start`` (the rest shared evenly by the others; default: all models alike).
 Only the contract's state layout is used (positions
 ``0..d-1``, velocities ``d..2d-1``), so any filter can be wrapped -- as long as its
@@ -345,16 +360,21 @@ class NoiseLevels:
     def update(self, state: TrackState, plots: Plots) -> TrackState:
         models, c = self._parts(state)
         B, M = c.shape
-        needed = c > 0  # a model of predicted probability zero is not evaluated
-        needed[:, : self.extra.size] = True
-        rows = self._rows(needed)
+        L = self.extra.size
+        needed = np.ones((B, M), bool)
+        rows = None
+        if M > L:  # a turn model of predicted probability zero is not evaluated
+            needed[:, L:] = c[:, L:] > 0
+            rows = self._rows(needed)
         if rows is None:
             s = self.flt.update(_flat(models), plots.take(np.repeat(np.arange(B), M)))
         else:
             idx, src = rows
             s = self.flt.update(_flat(models).take(idx), plots.take(idx // M)).take(src)
         new = _unflat(s, B, M)
-        ok = (new.status == _UPDATED) & needed  # (B, M)
+        ok = new.status == _UPDATED  # (B, M)
+        if rows is not None:
+            ok &= needed
         any_ok = ok.any(axis=1)
         ll = np.where(ok, new.log_likelihood, -np.inf)
         ll = np.where(any_ok[:, None], ll, 0.0)  # no usable model: keep the prediction

@@ -70,7 +70,7 @@ P_START = 0.9
 #: turn rate of the coordinated-turn models of the noise IMM (one each way), deg/s; 0: none
 TURN_RATE = 0.0
 #: white-noise acceleration of the turn models, m/s^2 (their PSD ``a^2 T``)
-TURN_ACCEL = 0.15
+TURN_ACCEL = 0.05
 #: a track evaluates its turn models while the probability that it is off the straight-leg
 #: level exceeds this (:class:`~seatrack.tracking.adaptive.NoiseLevels` ``turn_threshold``)
 TURN_THRESHOLD = 0.0

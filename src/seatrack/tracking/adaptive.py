@@ -242,10 +242,12 @@ class NoiseLevels:
                 f"need turn_noise >= 0 and 0 <= turn_threshold < 1, got {turn_noise}, "
                 f"{turn_threshold}"
             )
+        self.omega = np.asarray(turn_rates, dtype=float).reshape(-1)
+        if self.omega.size and flt.d < 2:
+            raise ValueError(f"turn models need a horizontal plane: d >= 2, got {flt.d}")
         self.flt = flt
         self.extra = ex
         self.along_track_ratio = float(along_track_ratio)
-        self.omega = np.asarray(turn_rates, dtype=float).reshape(-1)
         self.turn_threshold = float(turn_threshold)
         L, K = ex.size, self.omega.size
         M = L + K

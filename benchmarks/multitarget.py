@@ -402,6 +402,28 @@ def tune_seatrack(runs: list[MultiTargetRun]) -> None:
             print(f"seatrack {name}={v}: mean GOSPA {np.mean(g):.1f} ({each})", flush=True)
 
 
+def tune_turns(runs: list[MultiTargetRun]) -> None:
+    """Coordinated-turn models in the automatic noise IMM (off by default): turn rate,
+    their acceleration noise and the variable-structure threshold, one at a time (mean
+    GOSPA and the share of track-scans evaluating the turn models)."""
+    import seatrack.tracking.auto as auto
+
+    keys = ("TURN_RATE", "TURN_ACCEL", "TURN_THRESHOLD")
+    saved = {k: getattr(auto, k) for k in keys}
+    grid = [(1.5, 0.05, 0.0), (2.0, 0.05, 0.0), (3.0, 0.05, 0.0), (2.0, 0.15, 0.0)]
+    grid += [(2.0, 0.05, t) for t in (0.05, 0.1, 0.2, 0.5)]
+    try:
+        for values in [(0.0, saved["TURN_ACCEL"], 0.0), *grid]:
+            for k, v in zip(keys, values, strict=True):
+                setattr(auto, k, v)
+            g = [score(r, run_seatrack(r, TrackerConfig())).mean_gospa for r in runs]
+            print(f"seatrack turn models {dict(zip(keys, values, strict=True))}: mean GOSPA "
+                  f"{np.mean(g):.2f} ({', '.join(f'{x:.1f}' for x in g)})", flush=True)  # fmt: skip
+    finally:
+        for k, v in saved.items():
+            setattr(auto, k, v)
+
+
 def tune_methods(runs: list[MultiTargetRun]) -> None:
     """Every registered method as the per-track filter on the tuning runs, given only the
     sensor noise, with each automatic process-noise rule: the evidence for
@@ -618,6 +640,7 @@ def main() -> None:
         tune_methods(tune_runs)
     if args.tune:
         tune_seatrack(tune_runs)
+        tune_turns(tune_runs)
         ss = tune_stonesoup(tune_runs, TUNE)
     q_s, q_m = noise_levels(PERIOD)
     print(

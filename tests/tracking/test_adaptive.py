@@ -146,9 +146,9 @@ def test_along_track_extra_noise_is_shaped_by_the_velocity():
     P = np.broadcast_to(np.diag([100.0, 100.0, 1.0, 1.0]), (2, 4, 4)).copy()
     outer = TrackState.new(np.zeros(2), x, P)
     zero = np.zeros((4, 4, 4))  # B * M = 2 tracks x 2 levels
-    dt = np.full(4, 2.0)
-    Qs = shaped._extra_noise(zero, dt, 2, outer)
-    Qi = iso._extra_noise(zero, dt, 2, outer)
+    dt = np.full(2, 2.0)  # one interval a track
+    Qs = shaped._extra_noise(zero, dt, outer)
+    Qi = iso._extra_noise(zero, dt, outer)
     np.testing.assert_allclose(Qi[1], cv_noise(2.0, 2.0, 2))
     np.testing.assert_allclose(Qs[0], 0.0)  # the first level has no extra noise
     # track 0 (level 1): along x (East) 0.3 x, across (North) as the isotropic level
@@ -158,3 +158,134 @@ def test_along_track_extra_noise_is_shaped_by_the_velocity():
     np.testing.assert_allclose(Qs[3], Qi[3])
     with pytest.raises(ValueError, match="along_track_ratio"):
         NoiseLevels(base, (0.0, 1.0), 0.05, along_track_ratio=0.0)
+
+
+# -- coordinated-turn models ----------------------------------------------------------------
+TURNS = (np.radians(3.0), -np.radians(3.0))
+
+
+def _batch_run(flt, plots_list):
+    """Run tracks side by side in one batch (each track its own plots, same times)."""
+    x, P = plot_gaussian(_cat([p.take([0]) for p in plots_list]), SN, 10.0)
+    s = flt.initiate(plots_list[0].t[:1].repeat(len(plots_list)), x, P)
+    out = [s]
+    for k in range(1, len(plots_list[0])):
+        pk = _cat([p.take([k]) for p in plots_list])
+        s = flt.update(flt.predict(s, pk.t), pk)
+        out.append(s)
+    return out
+
+
+def _cat(plots):
+    return Plots(np.concatenate([p.t for p in plots]), np.concatenate([p.range for p in plots]),
+                 np.concatenate([p.azimuth for p in plots]))  # fmt: skip
+
+
+def test_turn_models_never_evaluated_leave_the_level_imm_unchanged():
+    """A threshold no track reaches: the levels alone, exactly, turn probabilities zero."""
+    plots, _ = _plots([Leg.straight(120.0)])
+    base = EKF(EKFConfig(q=0.001), SN)
+    two = NoiseLevels(base, (0.0, 1.0), 0.01, start=0.99)
+    four = NoiseLevels(base, (0.0, 1.0), 0.01, start=0.99, turn_rates=TURNS, turn_noise=0.01,
+                       turn_threshold=0.9)  # fmt: skip
+    for a, b in zip(_run(two, plots), _run(four, plots), strict=True):
+        mu = np.asarray(b.aux["noise_mu"])
+        assert np.all(mu[:, 2:] == 0.0)
+        assert np.allclose(a.x, b.x) and np.allclose(a.P, b.P)
+        assert np.allclose(a.aux["noise_mu"], mu[:, :2])
+
+
+def test_turn_model_prediction_is_the_coordinated_turn():
+    """A noiseless state predicted by a turn model at rate w lands on the circle."""
+    w, T, v = np.radians(2.0), 2.5, 8.0
+    imm = NoiseLevels(EKF(EKFConfig(q=0.0), SN), (0.0, 1.0), 0.05, turn_rates=(w,))
+    x = np.array([[1000.0, 2000.0, v, 0.0]])
+    s = imm.initiate(np.zeros(1), x, np.eye(4)[None] * 1e-6)
+    p = imm.predict(s, np.array([T]))
+    got = p.aux["noise_models"].x[0, 2]
+    want = [1000.0 + v * np.sin(w * T) / w, 2000.0 + v * (1 - np.cos(w * T)) / w,
+            v * np.cos(w * T), v * np.sin(w * T)]  # fmt: skip
+    np.testing.assert_allclose(got, want, rtol=1e-12)
+    np.testing.assert_allclose(p.aux["noise_models"].x[0, 0], [1000.0 + v * T, 2000.0, v, 0.0])
+
+
+@pytest.mark.parametrize("threshold", [0.0, 0.1])
+def test_turn_models_batched_subset_is_per_track_and_consistent(threshold):
+    """Tracks in one batch (some evaluating their turn models, some not) get what each gets
+    alone; probabilities sum to one, covariances stay symmetric positive definite."""
+    legs = [
+        [Leg.straight(60.0), Leg.turn(np.radians(90), np.radians(3)), Leg.straight(40.0)],
+        [Leg.straight(190.0)],
+        [Leg.turn(np.radians(-120), np.radians(2)), Leg.straight(130.0)],
+    ]
+    plots = [_plots(lg, seed=k)[0] for k, lg in enumerate(legs)]
+    n = min(len(p) for p in plots)
+    plots = [p.take(np.arange(n)) for p in plots]
+    imm = NoiseLevels(
+        EKF(EKFConfig(q=0.001), SN),
+        (0.0, 1.0),
+        0.01,
+        along_track_ratio=0.5,
+        start=0.9,
+        turn_rates=TURNS,
+        turn_noise=0.01,
+        turn_threshold=threshold,
+    )
+    together = _batch_run(imm, plots)
+    for k, p in enumerate(plots):
+        alone = _run(imm, p)
+        for a, b in zip(alone, together, strict=True):
+            np.testing.assert_allclose(b.x[k], a.x[0], rtol=1e-9, atol=1e-9)
+            np.testing.assert_allclose(b.P[k], a.P[0], rtol=1e-9, atol=1e-9)
+    for s in together:
+        mu = np.asarray(s.aux["noise_mu"])
+        assert np.allclose(mu.sum(1), 1.0) and np.all(mu >= 0)
+        for P in [*s.P, *s.aux["noise_models"].P.reshape(-1, 4, 4)]:
+            assert np.allclose(P, P.T) and np.all(np.linalg.eigvalsh(P) > 0)
+    if threshold > 0:
+        assert 0 < np.mean([np.mean(1 - np.asarray(s.aux["noise_mu"])[:, 0] > threshold)
+                            for s in together]) < 1  # fmt: skip
+
+
+def test_turn_models_lower_the_error_in_a_turn():
+    legs = [Leg.straight(150.0), Leg.turn(np.radians(120), np.radians(2)), Leg.straight(60.0)]
+    err2, err4 = [], []
+    for seed in range(4):
+        plots, tr = _plots(legs, seed=seed)
+        base = EKF(EKFConfig(q=0.001), SN)
+        two = NoiseLevels(base, (0.0, 0.6), 0.01, along_track_ratio=0.5, start=0.9)
+        four = NoiseLevels(
+            base,
+            (0.0, 0.6),
+            0.01,
+            along_track_ratio=0.5,
+            start=0.9,
+            turn_rates=(np.radians(2), -np.radians(2)),
+            turn_noise=0.005,
+        )
+        turn = (plots.t > 160) & (plots.t < 220)
+        for flt, out in ((two, err2), (four, err4)):
+            est = _run(flt, plots)
+            e = np.array([np.linalg.norm(s.x[0, :2] - p[:2]) for s, p in zip(est, tr.pos)])
+            out.append(e[turn])
+    rms = lambda e: np.sqrt(np.mean(np.concatenate(e) ** 2))  # noqa: E731
+    assert rms(err4) < 0.85 * rms(err2)
+
+
+def test_turn_models_in_the_jpda_merge_and_columns():
+    plots, _ = _plots([Leg.straight(30.0)])
+    imm = NoiseLevels(EKF(EKFConfig(q=0.01), SN), (0.0, 1.0), 0.05, turn_rates=TURNS)
+    s = _run(imm, plots.take([0, 1, 2]))[-1]
+    pred = imm.predict(s, plots.t[3:4])
+    hyps = TrackState.concat([imm.update(pred, plots.take([3])), pred])
+    merged = imm.merge(hyps, np.array([0.7, 0.3]), np.zeros(2, np.int64), 1)
+    mu = np.asarray(merged.aux["noise_mu"])
+    assert mu.shape == (1, 4) and np.isclose(mu.sum(), 1.0)
+    assert np.isclose(imm.columns(merged)["manoeuvre"][0], mu[0, 1:].sum())
+
+
+def test_turn_parameters_are_checked():
+    with pytest.raises(ValueError, match="turn_threshold"):
+        NoiseLevels(EKF(), (0.0, 1.0), turn_rates=TURNS, turn_threshold=1.0)
+    with pytest.raises(ValueError, match="turn_noise"):
+        NoiseLevels(EKF(), (0.0, 1.0), turn_rates=TURNS, turn_noise=-1.0)

@@ -21,11 +21,26 @@ Mixing and combination are the compiled kernels of the IMM engine
 (:func:`seatrack.filters.imm.mix`, :func:`~seatrack.filters.imm.combine`); every model of
 every track goes through the wrapped filter in one batched call.
 
+Optional coordinated-turn models (``turn_rates``, rad/s, usually ``(w, -w)``) follow the
+``L`` levels: the filter's prediction with extra PSD ``turn_noise``, then the linear map
+``G = F_ct(w, T) F_cv(T)^-1 = [[I, S - T I], [0, R(w T)]]`` on the x-y positions and
+velocities (``S`` the turn's position-from-velocity block, ``R`` the rotation), so the
+model turns a constant-velocity prediction into a coordinated turn in the same state
+(``x <- G x``, ``P <- G P G^T``; a compiled kernel). The structure is variable: a track
+evaluates its turn models only while ``1 - mu_0`` (off the first level) exceeds
+``turn_threshold``; the others run the levels alone -- their turn probabilities set to zero
+(the levels renormalised) and the levels' own chain -- and their turn models are not
+computed: the needed models of all tracks are indexed out, predicted or updated in one call
+of the filter and put back, a model not computed holding a copy of the track's last level
+(a finite placeholder of probability zero). With ``turn_threshold`` 0 every track runs every
+model. A model of predicted probability zero is skipped in the update alike.
+
 The model states live in ``aux["noise_models"]`` (one nested TrackState whose arrays are
 ``(B, M, ...)``: the models stacked on a second axis) and the model probabilities in
 ``aux["noise_mu"]``; the ``manoeuvre`` output column is the probability of the high-noise
-model. The switching probability per scan ``p_switch`` makes the transition matrix
-``[[1 - p, p], [p, 1 - p]]``. A new track starts in the first (lowest) model with
+level and the turn models. The switching probability per scan ``p_switch`` makes the
+transition matrix ``[[1 - p, p], [p, 1 - p]]`` (``M`` models: stay ``1 - p``, any other
+``p / (M - 1)``). A new track starts in the first (lowest) model with
 probability ``start`` (the rest shared evenly by the others; default: all models alike).
 Only the contract's state layout is used (positions
 ``0..d-1``, velocities ``d..2d-1``), so any filter can be wrapped -- as long as its
@@ -61,6 +76,7 @@ from seatrack.tracking.merge import moment_match
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
 
 __all__ = ["NoiseLevels"]
 
@@ -86,6 +102,13 @@ def _flat(stacked: TrackState) -> TrackState:
 
 def _unflat(flat: TrackState, B: int, M: int) -> TrackState:
     return flat.map(lambda a: a.reshape((B, M) + a.shape[1:]))
+
+
+def _uniform(M: int, p_switch: float) -> FloatArray:
+    """Transition matrix of ``M`` models: stay with ``1 - p_switch``, else any other alike."""
+    out = np.full((M, M), p_switch / (M - 1))
+    np.fill_diagonal(out, 1 - p_switch)
+    return out
 
 
 @functools.lru_cache(maxsize=64)
@@ -128,18 +151,69 @@ def _add_shaped_noise(P, extra, T, v, Pv, ratio):  # pragma: no cover - compiled
                     P[r, d + k, d + m] += a * b11
 
 
+@njit(cache=True)
+def _turn_map(X, P, rows, first, omega, T, d):  # pragma: no cover - compiled
+    """In place, for each track ``b`` in ``rows`` and turn model ``k``: the model ``first + k``
+    of ``X (B, M, n)``, ``P (B, M, n, n)`` -- predicted at constant velocity over ``T[b]`` s --
+    mapped to a coordinated turn at ``omega[k]`` rad/s in the x-y plane,
+    ``G = F_ct(omega, T) F_cv(T)^-1 = [[I, S - T I], [0, R(omega T)]]`` on positions
+    ``0, 1`` and velocities ``d, d + 1`` (identity elsewhere); ``x <- G x``,
+    ``P <- G P G^T`` (symmetrised)."""
+    n = X.shape[2]
+    G = np.zeros((n, n))
+    GP = np.empty((n, n))
+    x = np.empty(n)
+    for b in rows:
+        t = T[b]
+        for k in range(omega.size):
+            w = omega[k]
+            if abs(w * t) < 1e-12:
+                continue
+            sn, cs = np.sin(w * t), np.cos(w * t)
+            G[:, :] = 0.0
+            for a in range(n):
+                G[a, a] = 1.0
+            G[0, d], G[0, d + 1] = sn / w - t, -(1.0 - cs) / w
+            G[1, d], G[1, d + 1] = (1.0 - cs) / w, sn / w - t
+            G[d, d], G[d, d + 1], G[d + 1, d], G[d + 1, d + 1] = cs, -sn, sn, cs
+            j = first + k
+            for a in range(n):
+                v = 0.0
+                for c in range(n):
+                    v += G[a, c] * X[b, j, c]
+                x[a] = v
+                for m in range(n):
+                    v = 0.0
+                    for c in range(n):
+                        v += G[a, c] * P[b, j, c, m]
+                    GP[a, m] = v
+            for a in range(n):
+                X[b, j, a] = x[a]
+                for m in range(a, n):
+                    v = 0.0
+                    for c in range(n):
+                        v += GP[a, c] * G[m, c]
+                    P[b, j, a, m] = v
+                    P[b, j, m, a] = v
+
+
 class NoiseLevels:
     """An IMM over process-noise levels of one filter (see the module docstring).
 
     Parameters
     ----------
     flt : the filter, configured with the lowest noise level
-    extra : extra white-noise acceleration PSD of each model, m^2/s^3 (first usually 0)
+    extra : extra white-noise acceleration PSD of each level, m^2/s^3 (first usually 0)
     p_switch : probability per scan of leaving a model
     along_track_ratio : PSD of the extra acceleration along the track's velocity over its
         PSD across it (1: isotropic; see :func:`seatrack.models.motion.along_track_shape`)
-    start : probability of the first model at initiation, the others sharing the rest
-        evenly (none: ``1 / M`` each)
+    start : probability of the first model at initiation, the other levels sharing the
+        rest evenly (none: ``1 / L`` each); the turn models start at zero
+    turn_rates : turn rate of each coordinated-turn model, rad/s (none: no turn models)
+    turn_noise : extra white-noise acceleration PSD of the turn models, m^2/s^3
+    turn_threshold : a track evaluates its turn models only while the probability that it
+        is not in the first level exceeds this; the others run the levels alone, their
+        turn models' probabilities held at zero (0: every track, every scan)
     """
 
     def __init__(
@@ -149,6 +223,9 @@ class NoiseLevels:
         p_switch: float = 0.05,
         along_track_ratio: float = 1.0,
         start: float | None = None,
+        turn_rates: Sequence[float] = (),
+        turn_noise: float = 0.0,
+        turn_threshold: float = 0.0,
     ) -> None:
         ex = np.asarray(extra, dtype=float)
         if ex.ndim != 1 or ex.size < 2 or np.any(ex < 0) or not 0 < p_switch < 1:
@@ -160,14 +237,29 @@ class NoiseLevels:
             raise ValueError(f"along_track_ratio must be in (0, 1], got {along_track_ratio}")
         if start is not None and not 0 < start < 1:
             raise ValueError(f"start must be in (0, 1), got {start}")
+        if turn_noise < 0 or not 0 <= turn_threshold < 1:
+            raise ValueError(
+                f"need turn_noise >= 0 and 0 <= turn_threshold < 1, got {turn_noise}, "
+                f"{turn_threshold}"
+            )
+        self.omega = np.asarray(turn_rates, dtype=float).reshape(-1)
+        if self.omega.size and flt.d < 2:
+            raise ValueError(f"turn models need a horizontal plane: d >= 2, got {flt.d}")
         self.flt = flt
         self.extra = ex
         self.along_track_ratio = float(along_track_ratio)
-        M = ex.size
-        self.transition = np.full((M, M), p_switch / (M - 1))
-        np.fill_diagonal(self.transition, 1 - p_switch)
-        first = 1.0 / M if start is None else float(start)
-        self.start = np.full(M, (1.0 - first) / (M - 1))
+        self.turn_threshold = float(turn_threshold)
+        L, K = ex.size, self.omega.size
+        M = L + K
+        self._extra_all = np.concatenate([ex, np.full(K, float(turn_noise))])
+        self.transition = _uniform(M, p_switch)
+        # tracks not evaluating their turn models: the levels' chain alone, no way into a turn
+        self._levels_only = self.transition.copy()
+        self._levels_only[:L] = 0.0
+        self._levels_only[:L, :L] = _uniform(L, p_switch)
+        first = 1.0 / L if start is None else float(start)
+        self.start = np.zeros(M)
+        self.start[:L] = (1.0 - first) / (L - 1)
         self.start[0] = first
         self.d = flt.d
         self.range_rate = flt.range_rate
@@ -193,28 +285,47 @@ class NoiseLevels:
         return TrackState(state.t, state.x, state.P, state.nis, state.log_likelihood,
                           state.status, aux)  # fmt: skip
 
-    def _extra_noise(self, P: FloatArray, dt: FloatArray, B: int, outer: TrackState) -> FloatArray:
-        """``P`` (``B * M`` model covariances) plus ``extra[j] Q1(dt)`` on position-velocity;
-        with ``along_track_ratio < 1`` the unit acceleration is shaped along / across the
-        velocity of each track's combined estimate ``outer`` (``Q1 = blk (x) A``)."""
+    def _extra_noise(self, P: FloatArray, dt: FloatArray, outer: TrackState) -> FloatArray:
+        """``P`` (``B * M`` model covariances, track-major) plus ``extra[j] Q1(dt[b])`` on
+        position-velocity (``dt`` one interval a track, s); with ``along_track_ratio < 1``
+        the unit acceleration is shaped along / across the velocity of each track's
+        combined estimate ``outer`` (``Q1 = blk (x) A``)."""
         d, d2 = self.d, 2 * self.d
+        extra = self._extra_all
         out = P.copy()
         if self.along_track_ratio < 1.0:
             c = np.ascontiguousarray
             v, Pv = c(outer.x[:, d:d2]), c(outer.P[:, d:d2, d:d2])
-            T = c(dt[:: self.extra.size])  # one interval a track
-            _add_shaped_noise(out, self.extra, T, v, Pv, self.along_track_ratio)
+            _add_shaped_noise(out, extra, c(dt), v, Pv, self.along_track_ratio)
         elif dt.size and np.all(dt == dt[0]):  # one scan interval: one unit-PSD matrix
-            extra = np.tile(self.extra, B)
-            out[:, :d2, :d2] += extra[:, None, None] * _unit_cv_noise(float(dt[0]), self.d)
+            tiled = np.tile(extra, dt.size)
+            out[:, :d2, :d2] += tiled[:, None, None] * _unit_cv_noise(float(dt[0]), self.d)
         else:
-            out[:, :d2, :d2] += cv_noise(dt, np.tile(self.extra, B), self.d)
+            out[:, :d2, :d2] += cv_noise(np.repeat(dt, extra.size), np.tile(extra, dt.size), d)
         return out
+
+    def _turning(self, mu: FloatArray) -> BoolArray:
+        """Tracks that evaluate their turn models: off the first level with a probability
+        above the threshold."""
+        return 1.0 - mu[:, 0] > self.turn_threshold  # type: ignore[no-any-return]
+
+    def _rows(self, needed: BoolArray) -> tuple[IntArray, IntArray] | None:
+        """For ``(B, M)`` models of which ``needed`` are evaluated: the flat indices of the
+        needed ones, and for every model the row of the evaluated batch that fills it (one
+        not evaluated gets its track's last level: a finite placeholder of probability
+        zero); none when all are needed."""
+        if needed.all():
+            return None
+        flat = needed.ravel()
+        pos = (np.cumsum(flat) - 1).reshape(needed.shape)
+        L = self.extra.size
+        src = np.where(needed, pos, pos[:, L - 1 : L])
+        return np.flatnonzero(flat), src.ravel()
 
     # -- the contract -------------------------------------------------------------------
     def initiate(self, t: ArrayLike, x: ArrayLike, P: ArrayLike) -> TrackState:
         s = self.flt.initiate(t, x, P)
-        models = _zip_stack([s] * self.extra.size)
+        models = _zip_stack([s] * self.start.size)
         mu = np.tile(self.start, (len(s), 1))
         return TrackState(s.t, s.x, s.P, s.nis, s.log_likelihood, s.status,
                           {MODELS: models, MU: mu})  # fmt: skip
@@ -222,28 +333,58 @@ class NoiseLevels:
     def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
         models, mu = self._parts(state)
         B, M = mu.shape
-        tt, _ = step_times(state, t)
-        X0, P0, c = mix(IMMState(models.x, models.P, mu), self.transition, self._valid)
-        # all models of all tracks in one call of the filter: a batch of B * M states
+        L = self.extra.size
+        tt, dt = step_times(state, t)
+        trans, rows, turning = self.transition, None, np.zeros(0, np.int64)
+        if M > L:
+            on = self._turning(mu)
+            turning = np.flatnonzero(on)
+            if turning.size < B:  # the others: turn probabilities to zero, levels' chain
+                lv = mu[:, :L] / mu[:, :L].sum(axis=1, keepdims=True)
+                mu = np.where(on[:, None], mu, np.pad(lv, ((0, 0), (0, M - L))))
+                trans = np.where(on[:, None, None], self.transition, self._levels_only)
+                needed = np.ones((B, M), bool)
+                needed[:, L:] = on[:, None]
+                rows = self._rows(needed)
+        X0, P0, c = mix(IMMState(models.x, models.P, mu), trans, self._valid)
         flat = _flat(models.replace(x=X0, P=P0))
-        s = self.flt.predict(flat, np.repeat(tt, M))
-        new = _unflat(s.replace(P=self._extra_noise(s.P, s.t - flat.t, B, state)), B, M)
+        if rows is None:  # every model of every track in one call of the filter
+            s = self.flt.predict(flat, np.repeat(tt, M))
+        else:  # the needed models in one call, the others filled with a placeholder
+            idx, src = rows
+            s = self.flt.predict(flat.take(idx), tt[idx // M]).take(src)
+        new = _unflat(s.replace(P=self._extra_noise(s.P, dt, state)), B, M)
+        if turning.size:
+            _turn_map(new.x, new.P, turning, L, self.omega, dt, self.d)
         _, x, P, _ = combine(new.x, new.P, c, np.zeros_like(c), self._out)
         return predicted(state, tt, x, P, {MODELS: new, MU: c})
 
     def update(self, state: TrackState, plots: Plots) -> TrackState:
         models, c = self._parts(state)
         B, M = c.shape
-        new = _unflat(self.flt.update(_flat(models), plots.take(np.repeat(np.arange(B), M))), B, M)
+        L = self.extra.size
+        needed = np.ones((B, M), bool)
+        rows = None
+        if M > L:  # a turn model of predicted probability zero is not evaluated
+            needed[:, L:] = c[:, L:] > 0
+            rows = self._rows(needed)
+        if rows is None:
+            s = self.flt.update(_flat(models), plots.take(np.repeat(np.arange(B), M)))
+        else:
+            idx, src = rows
+            s = self.flt.update(_flat(models).take(idx), plots.take(idx // M)).take(src)
+        new = _unflat(s, B, M)
         ok = new.status == _UPDATED  # (B, M)
+        if rows is not None:
+            ok &= needed
         any_ok = ok.any(axis=1)
         ll = np.where(ok, new.log_likelihood, -np.inf)
         ll = np.where(any_ok[:, None], ll, 0.0)  # no usable model: keep the prediction
         mu, x, P, tot = combine(new.x, new.P, c, ll, self._out)
         best = np.argmax(mu, axis=1)
-        rows = np.arange(B)
+        rows_b = np.arange(B)
         status = np.where(any_ok, _UPDATED, _REJECTED).astype(np.int8)
-        nis = np.where(any_ok, new.nis[rows, best], np.nan)
+        nis = np.where(any_ok, new.nis[rows_b, best], np.nan)
         return TrackState(state.t, x, P, nis, np.where(any_ok, tot, np.nan), status,
                           {MODELS: new, MU: mu})  # fmt: skip
 
@@ -251,8 +392,10 @@ class NoiseLevels:
         return self.flt.innovation(self._base(state), plots)
 
     def columns(self, state: TrackState) -> dict[str, NDArray[Any]]:
+        """The filter's columns, and ``manoeuvre``: the probability of the highest level
+        and the turn models."""
         cols = self.flt.columns(self._base(state))
-        cols["manoeuvre"] = np.asarray(state.aux[MU])[:, -1]
+        cols["manoeuvre"] = np.asarray(state.aux[MU])[:, self.extra.size - 1 :].sum(axis=1)
         return cols
 
     def merge(self, states: TrackState, weights: FloatArray, owner: IntArray, n: int) -> TrackState:

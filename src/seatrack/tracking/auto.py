@@ -15,7 +15,10 @@ user gives none.
     :class:`~seatrack.tracking.adaptive.NoiseLevels`, an IMM that adds
     ``q_m = accel^2 T / 2`` during manoeuvres (``accel`` = 0.7 m/s^2 for ships: a 3 deg/s
     turn at 27 kn; switching probability :data:`P_SWITCH` per scan; a new track starts on
-    a straight leg with probability :data:`P_START`);
+    a straight leg with probability :data:`P_START`; optional coordinated-turn models,
+    :data:`TURN_RATE` each way, off by default: on the tuning scenarios they lower the
+    mean GOSPA by 1.7 % but cost 37-42 % more time per scan at 1,000 ships, and their
+    variable-structure form loses the gain first -- docs/tracking.md);
   - ``"wrap"`` -- the method as its defaults configure it, wrapped in the same IMM (its
     own noise is the low level);
   - ``"own"`` -- the method's defaults, untouched (a method with its own manoeuvre
@@ -44,6 +47,9 @@ __all__ = [
     "STRAIGHT_ACCEL",
     "P_SWITCH",
     "P_START",
+    "TURN_RATE",
+    "TURN_ACCEL",
+    "TURN_THRESHOLD",
     "AUTO_NOISE",
     "NOISE_KEYS",
     "scan_period",
@@ -63,6 +69,20 @@ P_SWITCH = 0.01
 #: probability that a new track starts in the straight-leg level (ships sail straight most
 #: of the time; tuning scenarios: 0.5 / 0.8 / 0.9 / 0.95 -> 152.6 / 152.2 / 152.1 / 152.2 m)
 P_START = 0.9
+
+#: turn rate of the coordinated-turn models of the noise IMM (one each way), deg/s; 0: none.
+#: Tuning scenarios, turn models on every track, off / 1.5 / 2 / 3 deg/s -> mean GOSPA
+#: 152.14 / 150.10 / 149.56 / 150.32 m; off by default: at 2 deg/s +37-42 % processor time
+#: per scan at 1,000 ships, +8-10 % at S10's scale (docs/tracking.md)
+TURN_RATE = 0.0
+#: white-noise acceleration of the turn models, m/s^2 (their PSD ``a^2 T``; 2 deg/s turns:
+#: 0.05 / 0.15 -> 149.56 / 149.83 m)
+TURN_ACCEL = 0.05
+#: a track evaluates its turn models while the probability that it is off the straight-leg
+#: level exceeds this (:class:`~seatrack.tracking.adaptive.NoiseLevels` ``turn_threshold``;
+#: 0 / 0.05 / 0.1 / 0.2 / 0.5 -> 149.56 / 151.05 / 151.62 / 152.54 / 152.48 m, with
+#: 100 / 95 / 65 / 30 / 20 % of the track-scans evaluating them)
+TURN_THRESHOLD = 0.0
 
 #: automatic process noise of each registered method (see the module docstring), from the
 #: mean GOSPA (m) on the tuning scenarios given only the sensor noise, own / wrap [/ levels]
@@ -153,8 +173,16 @@ def per_track_filter(
         m = build(name, tab, d=d, range_rate=range_rate, source=source)
     if how == "own":
         return m, how
-    extra = q_m - (q_s if how == "levels" else 0.0)
+    own = q_s if how == "levels" else 0.0
+    w = np.radians(TURN_RATE)
     levels = NoiseLevels(
-        m.filter, (0.0, extra), P_SWITCH, along_track_ratio=ALONG_TRACK_RATIO, start=P_START
+        m.filter,
+        (0.0, q_m - own),
+        P_SWITCH,
+        along_track_ratio=ALONG_TRACK_RATIO,
+        start=P_START,
+        turn_rates=(w, -w) if w > 0 else (),
+        turn_noise=max(TURN_ACCEL**2 * period - own, 0.0),
+        turn_threshold=TURN_THRESHOLD,
     )
     return dataclasses.replace(m, filter=levels), how

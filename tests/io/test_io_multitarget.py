@@ -5,6 +5,7 @@ import csv
 import numpy as np
 import pytest
 
+from seatrack.config import parse_config
 from seatrack.filters.base import Plots
 from seatrack.filters.base import SensorNoise
 from seatrack.filters.registry import METHODS
@@ -16,6 +17,7 @@ from seatrack.io.multitarget import write_tracks
 from seatrack.io.multitarget import write_unlabelled_plots
 from seatrack.io.table import InputError
 from seatrack.tracking import MultiTargetTracker
+from seatrack.tracking import TrackerConfig
 from seatrack.tracking.adaptive import NoiseLevels
 from seatrack.tracking.auto import AUTO_NOISE
 
@@ -84,6 +86,11 @@ def test_make_filter_builds_every_registered_method_and_rejects_unknown_ones():
         assert isinstance(m.filter, NoiseLevels) == (rule != "own")
     m, rule = make_filter("ekf", {"q": 0.5}, p)
     assert rule == "given" and not isinstance(m.filter, NoiseLevels)
+    # the tracker's turn_rate_dps adds one coordinated-turn model each way
+    tcfg = parse_config(TrackerConfig, {"turn_rate_dps": 2.0})
+    m, rule = make_filter("ekf", {}, p, tracker=tcfg)
+    assert rule == "levels" and np.allclose(m.filter.omega, np.radians([2.0, -2.0]))
+    assert make_filter("ekf", {}, p)[0].filter.omega.size == 0
     with pytest.raises(ValueError, match="unknown method"):
         make_filter("kalman9", {}, p)
 

@@ -365,7 +365,7 @@ def track_scenario_run(
     t_tab, m_tab = split_config(table, "scenario")
     sensor = sensor_noise(m_tab, "scenario")
     tcfg = parse_config(TrackerConfig, {**t_tab, "association": association}, source="scenario")
-    flt, _ = make_filter(method, m_tab, sim.plots, "scenario")
+    flt, _ = make_filter(method, m_tab, sim.plots, "scenario", tcfg)
     tracker = MultiTargetTracker(flt.filter, sensor, tcfg)
     out = tracker.run(flt.prepare(sim.plots))
     d = 2

@@ -174,14 +174,21 @@ def sensor_noise(table: Mapping[str, Any], source: str = "config") -> SensorNois
 
 
 def make_filter(
-    method: str, table: Mapping[str, Any], plots: Plots, source: str = "config"
+    method: str,
+    table: Mapping[str, Any],
+    plots: Plots,
+    source: str = "config",
+    tracker: TrackerConfig | None = None,
 ) -> tuple[registry.Method, str]:
     """The per-track filter: registered method ``method`` configured from ``table`` (its
     keys and the sensor keys) for these plots, with the automatic process noise of
-    :mod:`seatrack.tracking.auto` when ``table`` sets none; and the noise rule applied."""
+    :mod:`seatrack.tracking.auto` when ``table`` sets none (with the turn models of
+    ``tracker.turn_rate``); and the noise rule applied."""
+    turn = (tracker or TrackerConfig()).turn_rate
     return per_track_filter(
-        method, table, plots.d, plots.has_range_rate, scan_period(plots.t), source
-    )
+        method, table, plots.d, plots.has_range_rate, scan_period(plots.t), source,
+        turn_rate=turn,
+    )  # fmt: skip
 
 
 # ---------------------------------------------------------------------------
@@ -316,7 +323,7 @@ def track_unlabelled(
     tcfg = parse_config(TrackerConfig, t_tab, source=source)
     sensor = sensor_noise(m_tab, source)
     plots = read_unlabelled_plots(plots_csv)
-    flt, noise = make_filter(method, m_tab, plots, source)
+    flt, noise = make_filter(method, m_tab, plots, source, tcfg)
     tracker = MultiTargetTracker(flt.filter, sensor, tcfg)
     run = tracker.run(flt.prepare(plots), all_tracks=all_tracks)
     rows = write_tracks(out, run, plots)

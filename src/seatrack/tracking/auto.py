@@ -30,6 +30,7 @@ user gives none.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -70,10 +71,11 @@ P_SWITCH = 0.01
 #: of the time; tuning scenarios: 0.5 / 0.8 / 0.9 / 0.95 -> 152.6 / 152.2 / 152.1 / 152.2 m)
 P_START = 0.9
 
-#: turn rate of the coordinated-turn models of the noise IMM (one each way), deg/s; 0: none.
-#: Tuning scenarios, turn models on every track, off / 1.5 / 2 / 3 deg/s -> mean GOSPA
-#: 152.14 / 150.10 / 149.56 / 150.32 m; off by default: at 2 deg/s +37-42 % processor time
-#: per scan at 1,000 ships, +8-10 % at S10's scale (docs/tracking.md)
+#: turn rate of the coordinated-turn models of the noise IMM (one each way), deg/s; 0: none
+#: (the default of ``TrackerConfig.turn_rate``, key ``turn_rate_dps``). Tuning scenarios,
+#: turn models on every track, off / 1.5 / 2 / 3 deg/s -> mean GOSPA 152.14 / 150.10 /
+#: 149.56 / 150.32 m; off by default: at 2 deg/s +37-42 % processor time per scan at 1,000
+#: ships, +8-10 % at S10's scale (docs/tracking.md)
 TURN_RATE = 0.0
 #: white-noise acceleration of the turn models, m/s^2 (their PSD ``a^2 T``; 2 deg/s turns:
 #: 0.05 / 0.15 -> 149.56 / 149.83 m)
@@ -141,6 +143,7 @@ def per_track_filter(
     period: float,
     source: str = "config",
     rule: str | None = None,
+    turn_rate: float = math.radians(TURN_RATE),
 ) -> tuple[Method, str]:
     """The per-track filter ``name`` for ``d``-D plots, and the noise rule applied.
 
@@ -152,6 +155,8 @@ def per_track_filter(
     period : scan period (s), for the automatic noise levels
     rule : override :data:`AUTO_NOISE` (``"levels"``, ``"wrap"``, ``"own"``; for the
         benchmark that chooses the table)
+    turn_rate : rad/s -- coordinated-turn models of the automatic noise IMM, one each way
+        (0: none; ``TrackerConfig.turn_rate``)
 
     Returns
     -------
@@ -174,7 +179,7 @@ def per_track_filter(
     if how == "own":
         return m, how
     own = q_s if how == "levels" else 0.0
-    w = np.radians(TURN_RATE)
+    w = float(turn_rate)
     levels = NoiseLevels(
         m.filter,
         (0.0, q_m - own),

@@ -21,6 +21,7 @@ Outputs, all written atomically (:mod:`seatrack.io.atomic`):
 from __future__ import annotations
 
 import csv
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -289,13 +290,17 @@ class UnlabelledRun:
             "levels": "automatic (two-level IMM)",
             "wrap": "the method's + manoeuvre level",
         }
+        text = noise.get(self.noise, self.noise)
+        w = self.tracker.config.turn_rate
+        if self.noise in ("levels", "wrap") and w > 0:
+            text += f", turn models +-{math.degrees(w):g} deg/s"
         return (
             f"{method} multi-target ({self.tracker.config.association}): "
             f"{self.run.scan_times.size} scans, {len(self.plots)} plots "
             f"({n_clutter} clutter or unconfirmed), {self.run.confirmed_ids.size} confirmed "
             f"tracks, {self.rows} rows written to {out}; clutter "
             f"{self.tracker.clutter.per_scan:.1f} plots/scan, Pd {self.tracker.detection.pd:.2f}"
-            f"; process noise {noise.get(self.noise, self.noise)}"
+            f"; process noise {text}"
         )  # fmt: skip
 
 

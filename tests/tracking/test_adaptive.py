@@ -11,6 +11,7 @@ from seatrack.filters.base import TrackState
 from seatrack.filters.base import plot_gaussian
 from seatrack.filters.ekf import EKF
 from seatrack.filters.ekf import EKFConfig
+from seatrack.models.motion import ct_transition
 from seatrack.simulate import Leg
 from seatrack.simulate import NoiseModel
 from seatrack.simulate import observe
@@ -203,8 +204,9 @@ def test_turn_model_prediction_is_the_coordinated_turn():
     s = imm.initiate(np.zeros(1), x, np.eye(4)[None] * 1e-6)
     p = imm.predict(s, np.array([T]))
     got = p.aux["noise_models"].x[0, 2]
-    want = [1000.0 + v * np.sin(w * T) / w, 2000.0 + v * (1 - np.cos(w * T)) / w,
-            v * np.cos(w * T), v * np.sin(w * T)]  # fmt: skip
+    # the project's coordinated turn, clockwise positive: heading East, a turn to starboard
+    want = ct_transition(np.append(x[0], w), T)[:4]
+    assert want[1] < 2000.0 and want[3] < 0.0
     np.testing.assert_allclose(got, want, rtol=1e-12)
     np.testing.assert_allclose(p.aux["noise_models"].x[0, 0], [1000.0 + v * T, 2000.0, v, 0.0])
 

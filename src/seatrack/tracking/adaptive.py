@@ -21,7 +21,8 @@ Mixing and combination are the compiled kernels of the IMM engine
 (:func:`seatrack.filters.imm.mix`, :func:`~seatrack.filters.imm.combine`); every model of
 every track goes through the wrapped filter in one batched call.
 
-Optional coordinated-turn models (``turn_rates``, rad/s, usually ``(w, -w)``) follow the
+Optional coordinated-turn models (``turn_rates``, rad/s clockwise positive, usually
+``(w, -w)``) follow the
 ``L`` levels: the filter's prediction with extra PSD ``turn_noise``, then the linear map
 ``G = F_ct(w, T) F_cv(T)^-1 = [[I, S - T I], [0, R(w T)]]`` on the x-y positions and
 velocities (``S`` the turn's position-from-velocity block, ``R`` the rotation), so the
@@ -155,7 +156,7 @@ def _add_shaped_noise(P, extra, T, v, Pv, ratio):  # pragma: no cover - compiled
 def _turn_map(X, P, rows, first, omega, T, d):  # pragma: no cover - compiled
     """In place, for each track ``b`` in ``rows`` and turn model ``k``: the model ``first + k``
     of ``X (B, M, n)``, ``P (B, M, n, n)`` -- predicted at constant velocity over ``T[b]`` s --
-    mapped to a coordinated turn at ``omega[k]`` rad/s in the x-y plane,
+    mapped to a coordinated turn at ``omega[k]`` rad/s (clockwise positive) in the x-y plane,
     ``G = F_ct(omega, T) F_cv(T)^-1 = [[I, S - T I], [0, R(omega T)]]`` on positions
     ``0, 1`` and velocities ``d, d + 1`` (identity elsewhere); ``x <- G x``,
     ``P <- G P G^T`` (symmetrised)."""
@@ -173,9 +174,10 @@ def _turn_map(X, P, rows, first, omega, T, d):  # pragma: no cover - compiled
             G[:, :] = 0.0
             for a in range(n):
                 G[a, a] = 1.0
-            G[0, d], G[0, d + 1] = sn / w - t, -(1.0 - cs) / w
-            G[1, d], G[1, d + 1] = (1.0 - cs) / w, sn / w - t
-            G[d, d], G[d, d + 1], G[d + 1, d], G[d + 1, d + 1] = cs, -sn, sn, cs
+            # clockwise-positive turn rate, as models.motion.ct_transition
+            G[0, d], G[0, d + 1] = sn / w - t, (1.0 - cs) / w
+            G[1, d], G[1, d + 1] = -(1.0 - cs) / w, sn / w - t
+            G[d, d], G[d, d + 1], G[d + 1, d], G[d + 1, d + 1] = cs, sn, -sn, cs
             j = first + k
             for a in range(n):
                 v = 0.0

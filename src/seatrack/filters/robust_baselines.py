@@ -26,6 +26,7 @@ initialisation of the robust filter (:class:`~seatrack.filters.robust.SonarModel
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -383,10 +384,13 @@ def huber_minimax_threshold(eps: ArrayLike) -> FloatArray:
     return 0.5 * (lo + hi)
 
 
-#: :func:`huber_minimax_threshold` tabulated on log ``eps`` from 1e-4 to 0.5 (2049 points):
-#: the filters read it every scan, where the bisection cost 15-25 us per plot
-_LOG_EPS_TABLE = np.linspace(math.log(1e-4), math.log(0.5), 2049)
-_C_TABLE = huber_minimax_threshold(np.exp(_LOG_EPS_TABLE))
+@functools.cache
+def _minimax_table() -> tuple[FloatArray, FloatArray]:
+    """:func:`huber_minimax_threshold` tabulated on log ``eps`` from 1e-4 to 0.5 (2049
+    points), made on first use (2.5 ms): the filters read it every scan, where the bisection
+    cost 15-25 us per plot."""
+    log_eps = np.linspace(math.log(1e-4), math.log(0.5), 2049)
+    return log_eps, huber_minimax_threshold(np.exp(log_eps))
 
 
 def minimax_threshold_table(eps: ArrayLike) -> FloatArray:
@@ -394,7 +398,7 @@ def minimax_threshold_table(eps: ArrayLike) -> FloatArray:
     of it for ``eps`` in [1e-4, 0.5]; ``eps`` is clipped to that range): what the filters use
     each scan."""
     e = np.clip(np.asarray(eps, dtype=float), 1e-4, 0.5)
-    return np.interp(np.log(e), _LOG_EPS_TABLE, _C_TABLE)
+    return np.interp(np.log(e), *_minimax_table())
 
 
 def student_t_dof(eps: ArrayLike, least: float) -> FloatArray:

@@ -291,7 +291,7 @@ class ContaminatedConfig(OutlierConfig, LevelConfig):
 @dataclass(frozen=True)
 class RangeRateWithoutClass:
     """Mixin of the configurations that use the plots' range rate on the self-tuning ladder
-    but not with a target class (``robust``, ``huber``).
+    but not with a target class (``robust``, ``huber``, ``student-t``).
 
     The class's two levels are far apart (a fighter: 0.5 and 88 m/s^2); the quiet one lags
     in a manoeuvre, the robust update (algorithm R's redescending variance, Huber's bounded

@@ -166,8 +166,7 @@ def mixture_item(P, y, H, r, G, logp, k, dx, Po, pout, ws, tn, tm):  # pragma: n
     n = len(tn)
     m = len(tm)
     C = G.shape[0]
-    matmul_core(P, H.T, PHt)
-    matmul_core(H, PHt, HPH)
+    _hph_into(P, H, ws)  # PHt, HPH
     for g in range(C):
         logdet = _pattern_factor(HPH, r, k, G[g], S, L, m)
         if not logdet == logdet:
@@ -353,9 +352,7 @@ def _reweighted(  # pragma: no cover - compiled
     m = len(tm)
     huber = rule == 2
     iterations = int(par[0])
-    PHt, M, S, L, t, v = ws1[0], ws1[1], ws1[2], ws1[3], ws1[7], ws1[8]
-    matmul_core(P, H.T, PHt)
-    matmul_core(H, PHt, M)
+    M, S, L, t, v = _hph_into(P, H, ws1), ws1[2], ws1[3], ws1[7], ws1[8]
     if huber:  # the first Huber weights come from the innovation itself
         for a in range(m):
             e[a] = y[a]

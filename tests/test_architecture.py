@@ -2,7 +2,7 @@
 
 Layers point one way (a module imports only from its own layer or lower ones)::
 
-    0  geometry, kalman, models, config, information, data   (foundations)
+    0  geometry, kalman, models, config, information, jit, data   (foundations)
     1  filters, tma, navigation                    (estimators)
     2  tracking                                    (multi-target tracking)
     3  io                                          (file formats: readers and writers)
@@ -42,6 +42,7 @@ LAYERS: dict[str, int] = {
     "config": 0,
     "information": 0,
     "compiled": 0,
+    "jit": 0,
     "data": 0,
     "filters": 1,
     "tma": 1,

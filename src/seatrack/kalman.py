@@ -49,12 +49,12 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import guvectorize
 from numba import njit
 from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
 from seatrack.information import as_float64
+from seatrack.jit import gufunc
 
 FloatArray = NDArray[np.float64]
 
@@ -149,22 +149,15 @@ def predict_core(x, P, F, Q, xo, Po):  # pragma: no cover - compiled
     cov_core(P, F, Q, Po)
 
 
-@guvectorize(
-    ["void(f8[:], f8[:,:], f8[:,:], f8[:,:], f8[:], f8[:,:])"],
+@gufunc(
+    "void(f8[:], f8[:,:], f8[:,:], f8[:,:], f8[:], f8[:,:])",
     "(n),(n,n),(n,n),(n,n)->(n),(n,n)",
-    nopython=True,
-    cache=True,
 )
 def _predict_kernel(x, P, F, Q, xo, Po):  # pragma: no cover - compiled
     predict_core(x, P, F, Q, xo, Po)
 
 
-@guvectorize(
-    ["void(f8[:,:], f8[:,:], f8[:,:], f8[:,:])"],
-    "(n,n),(n,n),(n,n)->(n,n)",
-    nopython=True,
-    cache=True,
-)
+@gufunc("void(f8[:,:], f8[:,:], f8[:,:], f8[:,:])", "(n,n),(n,n),(n,n)->(n,n)")
 def _cov_predict_kernel(P, F, Q, Po):  # pragma: no cover - compiled
     cov_core(P, F, Q, Po)
 
@@ -314,14 +307,10 @@ def _angular_innovation(z, hx, angular, yo):  # pragma: no cover - compiled
         yo[i] = d
 
 
-@guvectorize(
-    [
-        "void(f8[:], f8[:,:], f8[:], f8[:], f8[:,:], f8[:,:], f8[:],"
-        " f8[:], f8[:,:], f8[:], f8[:,:], f8[:], f8[:], f8[:,:])"
-    ],
+@gufunc(
+    "void(f8[:], f8[:,:], f8[:], f8[:], f8[:,:], f8[:,:], f8[:],"
+    " f8[:], f8[:,:], f8[:], f8[:,:], f8[:], f8[:], f8[:,:])",
     "(n),(n,n),(m),(m),(m,n),(m,m),(m)->(n),(n,n),(m),(m,m),(),(),(n,m)",
-    nopython=True,
-    cache=True,
 )
 def _update_kernel(x, P, z, hx, H, R, angular, xo, Po, yo, So, nis, ll, Ko):  # pragma: no cover
     _angular_innovation(z, hx, angular, yo)
@@ -330,14 +319,10 @@ def _update_kernel(x, P, z, hx, H, R, angular, xo, Po, yo, So, nis, ll, Ko):  # 
     ll[0] = b
 
 
-@guvectorize(
-    [
-        "void(f8[:], f8[:,:], f8[:], f8[:,:], f8[:,:],"
-        " f8[:], f8[:,:], f8[:], f8[:,:], f8[:], f8[:], f8[:,:])"
-    ],
+@gufunc(
+    "void(f8[:], f8[:,:], f8[:], f8[:,:], f8[:,:],"
+    " f8[:], f8[:,:], f8[:], f8[:,:], f8[:], f8[:], f8[:,:])",
     "(n),(n,n),(m),(m,n),(m,m)->(n),(n,n),(m),(m,m),(),(),(n,m)",
-    nopython=True,
-    cache=True,
 )
 def _linear_update_kernel(x, P, z, H, R, xo, Po, yo, So, nis, ll, Ko):  # pragma: no cover
     _linear_innovation(x, z, H, yo)
@@ -554,7 +539,7 @@ def extended_update(
     return UpdateResult(xo, Po, y, S, nis, ll, K)
 
 
-@guvectorize(["void(f8[:], f8[:,:], f8[:])"], "(m),(m,m)->()", nopython=True, cache=True)
+@gufunc("void(f8[:], f8[:,:], f8[:])", "(m),(m,m)->()")
 def _mahalanobis_kernel(y, S, out):  # pragma: no cover - compiled
     m = y.shape[0]
     L = np.empty((m, m))

@@ -4,21 +4,43 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from importlib import resources
 
 import numpy as np
 import pytest
 
+from seatrack.geometry import G0
 from seatrack.models.targets import AIRCRAFT
 from seatrack.models.targets import FIGHTER
 from seatrack.models.targets import SHIP
 from seatrack.models.targets import SUBMARINE
 from seatrack.models.targets import TARGET_CLASSES
 from seatrack.models.targets import cv_steady_state
+from seatrack.models.targets import load_target_classes
 from seatrack.models.targets import predicted_mse
 from seatrack.models.targets import suggest_parameters
 from seatrack.models.targets import target_class
 
 DEG = math.pi / 180
+KN = 1852.0 / 3600.0
+
+#: the figures of the four classes as they were written in Python before they moved to
+#: seatrack/data/target_classes.toml (field: ship, submarine, aircraft, fighter), computed
+#: the same way: the bundled table must give them to the last bit
+_FIGURES_BEFORE_THE_TABLE = {
+    "speed_typical": (12 * KN, 8 * KN, 120.0, 250.0),
+    "speed_max": (30 * KN, 33 * KN, 250.0, 600.0),
+    "accel_steady": (0.01, 0.005, 0.1, 0.5),
+    "accel_typical": (0.05, 0.04, 5.0, 4.0 * G0),
+    "accel_max": (0.5, 0.3, G0 * math.tan(30 * DEG), 9.0 * G0),
+    "accel_tangential": (0.05, 0.03, 1.0, G0),
+    "turn_rate_typical": (0.5 * DEG, 0.5 * DEG, 3.0 * DEG, 4.0 * G0 / 250.0),
+    "turn_rate_max": (3.0 * DEG, 2.0 * DEG, 3.0 * DEG, 9.0 * G0 / 250.0),
+    "manoeuvre_time": (180.0, 120.0, 60.0, 15.0),
+    "straight_time": (900.0, 1200.0, 240.0, 30.0),
+    "turn_onset_time": (30.0, 30.0, 5.0, 1.0),
+    "p_max_accel": (0.05, 0.05, 0.1, 0.1),
+}
 
 
 def test_four_classes_by_name_and_unknown_name() -> None:
@@ -32,6 +54,97 @@ def test_four_classes_by_name_and_unknown_name() -> None:
 def test_every_number_has_a_source(tc) -> None:
     numeric = [f.name for f in dataclasses.fields(tc) if isinstance(getattr(tc, f.name), float)]
     assert numeric and all(tc.sources[name].strip() for name in numeric)
+
+
+def test_bundled_table_gives_the_figures_bit_for_bit() -> None:
+    assert list(TARGET_CLASSES) == ["ship", "submarine", "aircraft", "fighter"]
+    assert [SHIP, SUBMARINE, AIRCRAFT, FIGHTER] == list(TARGET_CLASSES.values())
+    numeric = [f.name for f in dataclasses.fields(SHIP) if f.name not in ("name", "sources")]
+    assert sorted(numeric) == sorted(_FIGURES_BEFORE_THE_TABLE)
+    for field, values in _FIGURES_BEFORE_THE_TABLE.items():
+        got = [getattr(c, field) for c in TARGET_CLASSES.values()]
+        assert all(type(g) is float for g in got), field
+        assert [g.hex() for g in got] == [float(v).hex() for v in values], field
+
+
+def test_sources_cite_the_references_in_full() -> None:
+    ship = SHIP.sources
+    assert ship["turn_rate_typical"] == (
+        "Cockcroft & Lameijer, Guide to the Collision Avoidance Rules, manoeuvring "
+        "information: 90 deg in 2-3 min (0.5-0.75 deg/s)"
+    )
+    assert ship["p_max_accel"].startswith("assumption (no published figure found)")
+    for tc in TARGET_CLASSES.values():
+        assert not any("{" in s or "}" in s for s in tc.sources.values()), tc.name
+
+
+def _bundled_toml() -> str:
+    f = resources.files("seatrack") / "data" / "target_classes.toml"
+    return f.read_text(encoding="utf-8")
+
+
+def test_loading_the_bundled_file_again_gives_equal_classes(tmp_path) -> None:
+    p = tmp_path / "classes.toml"
+    p.write_text(_bundled_toml(), encoding="utf-8")
+    again = load_target_classes(p)
+    assert dict(again) == dict(TARGET_CLASSES)
+    assert all(dict(again[n].sources) == dict(c.sources) for n, c in TARGET_CLASSES.items())
+
+
+@pytest.mark.parametrize(
+    ("old", "new", "message"),
+    [
+        (
+            "[ship.speed_max]\nkn = 30",
+            "[ship.speed_max]\nmph = 30",
+            r"ship\.speed_max: unknown key\(s\) mph \(the value goes under one unit key of kn, mps",
+        ),
+        ("[ship.speed_max]\nkn = 30", "[ship.speed_max]\nkn = 30\nmps = 3", "2 unit keys"),
+        (
+            "[ship.turn_rate_max]\ndps",
+            "[ship.turn_rate_max]\nkn",
+            "unknown key.*one unit key of dps, rad_s",
+        ),
+        ("[ship.p_max_accel]\nvalue = 0.05", "[ship.p_max_accel]\nvalue = '5 %'", "a number"),
+        ("[ship.p_max_accel]\nvalue = 0.05", "[ship.p_max_accel]\nvalue = true", "a number"),
+        (
+            "[ship.p_max_accel]\nvalue = 0.05",
+            "[ship.p_max_sway]\nvalue = 0.05",
+            r"ship: unknown key\(s\) p_max_sway",
+        ),
+        (
+            '[ship.p_max_accel]\nvalue = 0.05\nsource = "{ASSUMED}"',
+            "",
+            r"ship: missing key\(s\) p_max_accel",
+        ),
+        ("[ship.p_max_accel]\nvalue = 0.05", "[ship.p_max_accel]\nvalue = 0.6", "< 0.5"),
+        ('source = "{ASSUMED}"', 'source = "{ASSUMD}"', "unknown reference {ASSUMD}"),
+        ('source = "{SINGER}"', "sauce = 1", "manoeuvre_time: unknown key.*sauce"),
+        ('source = "{SINGER}"', "", "manoeuvre_time: missing key\\(s\\) source"),
+        ("[ship.speed_max]\nkn = 30", "[ship.speed_max]\nkn = 3", "speed_typical > speed_max"),
+    ],
+)
+def test_a_bad_table_is_refused_naming_the_file_and_key(tmp_path, old, new, message) -> None:
+    text = _bundled_toml()
+    assert old in text
+    p = tmp_path / "classes.toml"
+    p.write_text(text.replace(old, new, 1), encoding="utf-8")
+    with pytest.raises(ValueError, match=message) as e:
+        load_target_classes(p)
+    assert str(e.value).startswith(f"{p}: ")
+
+
+def test_unknown_and_missing_keys_of_a_class_are_named(tmp_path) -> None:
+    p = tmp_path / "classes.toml"
+    p.write_text("[boat]\nkeel = 1\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=r"boat: unknown key\(s\) keel"):
+        load_target_classes(p)
+    p.write_text("[references]\n", encoding="utf-8")
+    with pytest.raises(ValueError, match="no target class"):
+        load_target_classes(p)
+    p.write_text("[ship\n", encoding="utf-8")
+    with pytest.raises(ValueError, match=f"^{p}: "):
+        load_target_classes(p)
 
 
 def test_missing_source_or_inconsistent_numbers_are_rejected() -> None:

@@ -1,4 +1,5 @@
-"""Data bundled with seatrack: example scenarios and real AIS samples.
+"""Data bundled with seatrack: example scenarios, real AIS samples and the table of target
+classes (``target_classes.toml``, read by :mod:`seatrack.models.targets`).
 
 The AIS samples (``seatrack/data/ais/*.csv``) are real, uncleaned position reports from
 public sources; their provenance and licences are in ``seatrack/data/ais/README.md``.

@@ -38,7 +38,6 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numba import guvectorize
 from numba import njit
 from numpy.typing import ArrayLike
 from numpy.typing import NDArray
@@ -50,6 +49,7 @@ from seatrack.filters.base import common_columns
 from seatrack.filters.base import finish_update
 from seatrack.filters.base import predicted
 from seatrack.filters.base import step_times
+from seatrack.jit import gufunc
 from seatrack.models.measurement import in_layout
 from seatrack.models.motion import MotionModel
 
@@ -209,21 +209,17 @@ def combine_core(X, P, c, ll, out, mu, x, Pc):  # pragma: no cover - compiled
     return lse
 
 
-@guvectorize(
-    ["void(f8[:,:], f8[:,:,:], f8[:], f8[:,:], f8[:,:], f8[:,:], f8[:,:,:], f8[:])"],
+@gufunc(
+    "void(f8[:,:], f8[:,:,:], f8[:], f8[:,:], f8[:,:], f8[:,:], f8[:,:,:], f8[:])",
     "(M,n),(M,n,n),(M),(M,M),(M,n)->(M,n),(M,n,n),(M)",
-    nopython=True,
-    cache=True,
 )
 def _mix_kernel(X, P, mu, PI, valid, X0, P0, c):  # pragma: no cover - compiled
     mix_core(X, P, mu, PI, valid, X0, P0, c)
 
 
-@guvectorize(
-    ["void(f8[:,:], f8[:,:,:], f8[:], f8[:], f8[:], f8[:], f8[:], f8[:,:], f8[:])"],
+@gufunc(
+    "void(f8[:,:], f8[:,:,:], f8[:], f8[:], f8[:], f8[:], f8[:], f8[:,:], f8[:])",
     "(M,n),(M,n,n),(M),(M),(k)->(M),(k),(k,k),()",
-    nopython=True,
-    cache=True,
 )
 def _combine_kernel(X, P, c, ll, out, mu, x, Pc, tot):  # pragma: no cover - compiled
     tot[0] = combine_core(X, P, c, ll, out, mu, x, Pc)

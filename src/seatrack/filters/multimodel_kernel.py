@@ -10,10 +10,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import guvectorize
 from numba import njit
 
 from seatrack.filters.imm import markov_predict_core
+from seatrack.jit import gufunc
 from seatrack.kalman import cholesky_core
 from seatrack.kalman import forward_core
 from seatrack.kalman import matmul_core
@@ -269,15 +269,11 @@ def step_core(
     return lse, nis
 
 
-@guvectorize(
-    [
-        "void(f8[:], f8[:,:], f8[:], f8, f8[:], f8[:,:], f8, f8, f8[:], f8[:], f8[:,:], f8[:,:],"
-        " f8[:,:], f8, f8, f8[:], f8[:,:], f8[:], f8[:], f8[:,:], f8[:], f8[:])"
-    ],
+@gufunc(
+    "void(f8[:], f8[:,:], f8[:], f8, f8[:], f8[:,:], f8, f8, f8[:], f8[:], f8[:,:], f8[:,:],"
+    " f8[:,:], f8, f8, f8[:], f8[:,:], f8[:], f8[:], f8[:,:], f8[:], f8[:])",
     "(n),(n,n),(N),(),(d),(d,d),(),(),(d),(d),(N,d),(N,N),(d,d),(),()"
     "->(n),(n,n),(N),(n),(n,n),(),()",
-    nopython=True,
-    cache=True,
 )
 def step_kernel(
     x, P, beta, T, Z, R, rho, srr2, spos, svel, alphas, pi, Q, use_rr, integ,

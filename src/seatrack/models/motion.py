@@ -28,11 +28,11 @@ from typing import ClassVar
 from typing import Protocol
 
 import numpy as np
-from numba import guvectorize
 from numba import njit
 from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
+from seatrack.jit import gufunc
 from seatrack.kalman import cov_core
 
 FloatArray = NDArray[np.float64]
@@ -326,12 +326,7 @@ def _ct_predict_core(x, P, T, q, q_omega, xo, Po):  # pragma: no cover - compile
     cov_core(P, F, Q, Po)
 
 
-@guvectorize(
-    ["void(f8[:], f8[:,:], f8, f8, f8, f8[:], f8[:,:])"],
-    "(n),(n,n),(),(),()->(n),(n,n)",
-    nopython=True,
-    cache=True,
-)
+@gufunc("void(f8[:], f8[:,:], f8, f8, f8, f8[:], f8[:,:])", "(n),(n,n),(),(),()->(n),(n,n)")
 def _ct_predict_kernel(x, P, T, q, q_omega, xo, Po):  # pragma: no cover - compiled
     _ct_predict_core(x, P, T, q, q_omega, xo, Po)
 

@@ -4,7 +4,9 @@ filter parameters they imply.
 A :class:`TargetClass` holds the physical quantities of a kind of target (speeds, the
 random accelerations of steady motion, the lateral acceleration and turn rate of its
 manoeuvres, how long manoeuvres and straight legs last), each with its source in
-:attr:`TargetClass.sources`. From them it derives the process-noise parameters each kind
+:attr:`TargetClass.sources`. The four classes (:data:`TARGET_CLASSES`) are data: their
+figures, units and sources are in ``seatrack/data/target_classes.toml``, read once at import
+(:func:`load_target_classes`). From them it derives the process-noise parameters each kind
 of filter needs, as documented rules of thumb:
 
 * CV white-noise acceleration PSD ``q`` (m^2/s^3) for steady and for manoeuvring motion:
@@ -59,8 +61,13 @@ Units: SI and radians inside (m/s, m/s^2, rad/s, s).
 from __future__ import annotations
 
 import math
+import re
+import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass
 from dataclasses import field
+from importlib import resources
+from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
@@ -71,6 +78,7 @@ from scipy.linalg import solve_discrete_lyapunov
 from scipy.optimize import minimize_scalar
 
 from seatrack.geometry import G0
+from seatrack.geometry import KNOT_MPS
 
 FloatArray = NDArray[np.float64]
 
@@ -83,6 +91,7 @@ __all__ = [
     "AIRCRAFT",
     "FIGHTER",
     "target_class",
+    "load_target_classes",
     "SteadyState",
     "cv_steady_state",
     "predicted_mse",
@@ -90,23 +99,30 @@ __all__ = [
 ]
 
 _DEG = math.pi / 180.0
-_KN = 1852.0 / 3600.0
 
-#: the numeric fields every class documents in ``sources``
-_DOCUMENTED = (
-    "speed_typical",
-    "speed_max",
-    "accel_steady",
-    "accel_typical",
-    "accel_max",
-    "accel_tangential",
-    "turn_rate_typical",
-    "turn_rate_max",
-    "manoeuvre_time",
-    "straight_time",
-    "turn_onset_time",
-    "p_max_accel",
+_SPEED = MappingProxyType({"kn": KNOT_MPS, "mps": 1.0})
+_ACCEL = MappingProxyType({"mps2": 1.0, "g": G0})
+_RATE = MappingProxyType({"dps": _DEG, "rad_s": 1.0})
+_TIME = MappingProxyType({"s": 1.0})
+#: the numeric fields every class documents in ``sources``, each with the unit keys the
+#: table of classes may give it in and their factor to SI (radians)
+_UNITS: MappingProxyType[str, MappingProxyType[str, float]] = MappingProxyType(
+    {
+        "speed_typical": _SPEED,
+        "speed_max": _SPEED,
+        "accel_steady": _ACCEL,
+        "accel_typical": _ACCEL,
+        "accel_max": _ACCEL,
+        "accel_tangential": _ACCEL,
+        "turn_rate_typical": _RATE,
+        "turn_rate_max": _RATE,
+        "manoeuvre_time": _TIME,
+        "straight_time": _TIME,
+        "turn_onset_time": _TIME,
+        "p_max_accel": MappingProxyType({"value": 1.0}),
+    }
 )
+_DOCUMENTED = tuple(_UNITS)
 
 
 @dataclass(frozen=True)
@@ -241,147 +257,101 @@ def _positive(v: float, name: str) -> float:
 
 
 # ---------------------------------------------------------------------------
-# The four classes
+# The four classes, read from seatrack/data/target_classes.toml
 # ---------------------------------------------------------------------------
-_IMO = "IMO MSC.137(76) (tactical diameter <= 5 L, advance <= 4.5 L)"
-_COCKCROFT = "Cockcroft & Lameijer, Guide to the Collision Avoidance Rules, manoeuvring information"
-_SINGER = "Singer 1970 / Li & Jilkov 2003 sec. IV (tau_m ~ 60 s lazy turn, 10-20 s evasive)"
-_ASSUMED = "assumption (no published figure found); see seatrack.models.targets"
+#: the bundled table of target classes (figures, units and sources), in seatrack/data
+_TABLE_FILE = "target_classes.toml"
 
-SHIP = TargetClass(
-    name="ship",
-    speed_typical=12 * _KN,
-    speed_max=30 * _KN,
-    accel_steady=0.01,
-    accel_typical=0.05,
-    accel_max=0.5,
-    accel_tangential=0.05,
-    turn_rate_typical=0.5 * _DEG,
-    turn_rate_max=3.0 * _DEG,
-    manoeuvre_time=180.0,
-    straight_time=900.0,
-    turn_onset_time=30.0,
-    p_max_accel=0.05,
-    sources={
-        "speed_typical": "merchant service speed 10-15 kn (bundled AIS samples: "
-        "median SOG 6-14 kn of the moving vessels, seatrack/data/ais/README.md)",
-        "speed_max": "fast ferries / HSC / naval vessels ~30 kn (AIS sample: HSC at 15 kn "
-        "median, 22 kn peak)",
-        "accel_steady": _ASSUMED + ": course kept within ~1 deg and speed within ~0.2 kn "
-        "over a minute at 12 kn",
-        "accel_typical": "turn_rate_typical x speed_typical = 0.0087 rad/s x 6.2 m/s",
-        "accel_tangential": _ASSUMED + ": a change of 3 kn in 30 s (engine orders)",
-        "accel_max": "speed change and turn of a small fast craft: 3 deg/s at 10 m/s = "
-        "0.52 m/s^2; merchant ships stay below 0.2 m/s^2 (" + _IMO + ")",
-        "turn_rate_typical": _COCKCROFT + ": 90 deg in 2-3 min (0.5-0.75 deg/s)",
-        "turn_rate_max": "small craft / pilot boats: the AIS sample's port tender turns "
-        "671 deg in 5 min (2.2 deg/s); " + _IMO + " gives 1.7 deg/s for L = 100 m at 15 kn",
-        "manoeuvre_time": _COCKCROFT + ": 90 deg in 2-3 min",
-        "straight_time": _ASSUMED + ": coastal legs of 10-20 min between alterations",
-        "turn_onset_time": _IMO + ": 10 deg heading change within 2.5 L of 10 deg rudder "
-        "(about 30 s for L = 100 m at 8 m/s)",
-        "p_max_accel": _ASSUMED,
-    },
-)
+_REFERENCE = re.compile(r"\{([A-Za-z_]+)\}")
 
-SUBMARINE = TargetClass(
-    name="submarine",
-    speed_typical=8 * _KN,
-    speed_max=33 * _KN,
-    accel_steady=0.005,
-    accel_typical=0.04,
-    accel_max=0.3,
-    accel_tangential=0.03,
-    turn_rate_typical=0.5 * _DEG,
-    turn_rate_max=2.0 * _DEG,
-    manoeuvre_time=120.0,
-    straight_time=1200.0,
-    turn_onset_time=30.0,
-    p_max_accel=0.05,
-    sources={
-        "speed_typical": "tactical speed 8-13 kn of nuclear submarines "
-        "(Wikipedia, 'Tactical speed')",
-        "speed_max": "USS Scranton (SSN-756): 33 kn submerged (Wikipedia, 'Tactical speed')",
-        "accel_steady": _ASSUMED + ": submerged, no sea-state forcing (half the ship's)",
-        "accel_typical": "turn_rate_typical x speed_typical = 0.0087 rad/s x 4.1 m/s",
-        "accel_max": _ASSUMED + ": 2 deg/s at 8 m/s (0.28 m/s^2)",
-        "accel_tangential": _ASSUMED + ": a change of 2 kn in 30 s",
-        "turn_rate_typical": _ASSUMED + ": as a ship of the same length (" + _COCKCROFT + ")",
-        "turn_rate_max": _ASSUMED + ": tactical diameter ~4 L, L = 100 m, at 8 kn (" + _IMO + ")",
-        "manoeuvre_time": _SINGER,
-        "straight_time": _ASSUMED + ": long quiet legs of 20 min and more",
-        "turn_onset_time": _IMO + " (as the ship)",
-        "p_max_accel": _ASSUMED,
-    },
-)
 
-AIRCRAFT = TargetClass(
-    name="aircraft",
-    speed_typical=120.0,
-    speed_max=250.0,
-    accel_steady=0.1,
-    accel_typical=5.0,
-    accel_max=G0 * math.tan(30 * _DEG),
-    accel_tangential=1.0,
-    turn_rate_typical=3.0 * _DEG,
-    turn_rate_max=3.0 * _DEG,
-    manoeuvre_time=60.0,
-    straight_time=240.0,
-    turn_onset_time=5.0,
-    p_max_accel=0.1,
-    sources={
-        "speed_typical": "approach / terminal-area speeds 90-150 m/s (175-290 kn)",
-        "speed_max": "cruise ~250 m/s (Mach 0.8 at altitude)",
-        "accel_steady": _ASSUMED + ": light turbulence and autopilot corrections",
-        "accel_typical": "standard-rate turn at 100 m/s: 0.052 rad/s x 100 m/s = 5.2 m/s^2 "
-        "(28 deg bank)",
-        "accel_max": "ICAO: holding turns at 25 deg bank or rate one; 30 deg bank "
-        "(g tan 30 = 5.7 m/s^2) is the usual airliner limit",
-        "accel_tangential": _ASSUMED + ": terminal-area speed changes of about 2 kn/s",
-        "turn_rate_typical": "SKYbrary 'Standard Rate Turn': 3 deg/s",
-        "turn_rate_max": "SKYbrary: rate one (3 deg/s) at low speed, rate half (1.5 deg/s) "
-        "above 250 kn",
-        "manoeuvre_time": _SINGER + "; a standard-rate 180 deg turn takes 60 s",
-        "straight_time": _ASSUMED + ": terminal-area legs of a few minutes",
-        "turn_onset_time": _ASSUMED + ": roll-in to 25-30 deg bank in about 5 s",
-        "p_max_accel": _ASSUMED,
-    },
-)
+def load_target_classes(path: str | Path | None = None) -> MappingProxyType[str, TargetClass]:
+    """Target classes from a TOML table (default: the bundled
+    ``seatrack/data/target_classes.toml``, the source of :data:`TARGET_CLASSES`).
 
-FIGHTER = TargetClass(
-    name="fighter",
-    speed_typical=250.0,
-    speed_max=600.0,
-    accel_steady=0.5,
-    accel_typical=4.0 * G0,
-    accel_max=9.0 * G0,
-    accel_tangential=G0,
-    turn_rate_typical=4.0 * G0 / 250.0,
-    turn_rate_max=9.0 * G0 / 250.0,
-    manoeuvre_time=15.0,
-    straight_time=30.0,
-    turn_onset_time=1.0,
-    p_max_accel=0.1,
-    sources={
-        "speed_typical": "air-combat speeds 200-300 m/s",
-        "speed_max": "Mach 2 at altitude (~600 m/s), F-16 class",
-        "accel_steady": _ASSUMED + ": between manoeuvres of an air-combat engagement",
-        "accel_typical": "3-6 g turns (the issue's fighter scenario), 4 g typical",
-        "accel_max": "F-16: first fighter built to sustain 9 g turns (7 g with a centreline tank)",
-        "accel_tangential": _ASSUMED + ": 1 g along track (afterburner / speed brake)",
-        "turn_rate_typical": "accel_typical / speed_typical (4 g at 250 m/s = 9 deg/s)",
-        "turn_rate_max": "accel_max / speed_typical (9 g at 250 m/s = 20 deg/s)",
-        "manoeuvre_time": _SINGER + ": evasive manoeuvre 10-20 s",
-        "straight_time": _ASSUMED + ": tens of seconds between manoeuvres in combat",
-        "turn_onset_time": _ASSUMED + ": fly-by-wire g onset within about 1 s",
-        "p_max_accel": _ASSUMED,
-    },
-)
+    Every class is a table of the fields of :class:`TargetClass` (name excepted), each a
+    table with its value under the key of its unit (``kn``/``mps``, ``mps2``/``g``,
+    ``dps``/``rad_s``, ``s``; ``value`` for ``p_max_accel``) and its ``source``; a source
+    may cite an entry of the ``[references]`` table as ``{NAME}``. Values are converted to
+    SI and radians (``value * factor``).
 
-#: name -> class
-TARGET_CLASSES: MappingProxyType[str, TargetClass] = MappingProxyType(
-    {c.name: c for c in (SHIP, SUBMARINE, AIRCRAFT, FIGHTER)}
-)
+    Raises
+    ------
+    ValueError
+        Naming the file and the key, for a missing or unknown key, a unit not allowed for
+        the field, a value that is not a number, an unknown reference, or figures that
+        :class:`TargetClass` refuses.
+    """
+    if path is None:
+        text = (resources.files("seatrack") / "data" / _TABLE_FILE).read_text("utf-8")
+        where = f"seatrack/data/{_TABLE_FILE}"
+    else:
+        text, where = Path(path).read_text(encoding="utf-8"), str(path)
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as e:
+        raise ValueError(f"{where}: {e}") from None
+    refs = doc.pop("references", {})
+    if not isinstance(refs, dict) or not all(isinstance(v, str) for v in refs.values()):
+        raise ValueError(f"{where}: references: expected a table of strings")
+    classes = {}
+    for name, table in doc.items():
+        if not isinstance(table, dict):
+            raise ValueError(f"{where}: {name}: expected a table of fields")
+        _check_keys(where, name, set(table), set(_UNITS))
+        figures = {f: _figure(where, f"{name}.{f}", table[f], _UNITS[f], refs) for f in _UNITS}
+        try:
+            classes[name] = TargetClass(
+                name,
+                **{f: v for f, (v, _) in figures.items()},
+                sources={f: s for f, (_, s) in figures.items()},
+            )
+        except ValueError as e:
+            raise ValueError(f"{where}: {e}") from None
+    if not classes:
+        raise ValueError(f"{where}: no target class")
+    return MappingProxyType(classes)
+
+
+def _check_keys(where: str, key: str, given: set[str], wanted: set[str]) -> None:
+    if given - wanted:
+        raise ValueError(f"{where}: {key}: unknown key(s) {', '.join(sorted(given - wanted))}")
+    if wanted - given:
+        raise ValueError(f"{where}: {key}: missing key(s) {', '.join(sorted(wanted - given))}")
+
+
+def _figure(
+    where: str, key: str, table: Any, units: Mapping[str, float], refs: Mapping[str, str]
+) -> tuple[float, str]:
+    """``(value in SI, source)`` of one ``[CLASS.FIELD]`` table."""
+    if not isinstance(table, dict):
+        raise ValueError(f"{where}: {key}: expected a table (unit key and source)")
+    allowed = f"the value goes under one unit key of {', '.join(units)}, beside source"
+    extra = sorted(set(table) - set(units) - {"source"})
+    if extra:
+        raise ValueError(f"{where}: {key}: unknown key(s) {', '.join(extra)} ({allowed})")
+    unit = [k for k in table if k in units]
+    if len(unit) != 1:
+        raise ValueError(f"{where}: {key}: {len(unit)} unit keys ({allowed})")
+    if "source" not in table:
+        raise ValueError(f"{where}: {key}: missing key(s) source")
+    v, source = table[unit[0]], table["source"]
+    if isinstance(v, bool) or not isinstance(v, int | float):
+        raise ValueError(f"{where}: {key}.{unit[0]}: expected a number, got {v!r}")
+    if not isinstance(source, str):
+        raise ValueError(f"{where}: {key}.source: expected a string, got {source!r}")
+    unknown = [r for r in _REFERENCE.findall(source) if r not in refs]
+    if unknown:
+        raise ValueError(f"{where}: {key}.source: unknown reference {{{unknown[0]}}}")
+    return v * units[unit[0]], _REFERENCE.sub(lambda m: refs[m.group(1)], source)
+
+
+#: name -> class (ship, submarine, aircraft, fighter), from the bundled table
+TARGET_CLASSES: MappingProxyType[str, TargetClass] = load_target_classes()
+SHIP = TARGET_CLASSES["ship"]
+SUBMARINE = TARGET_CLASSES["submarine"]
+AIRCRAFT = TARGET_CLASSES["aircraft"]
+FIGHTER = TARGET_CLASSES["fighter"]
 
 
 def target_class(name: str) -> TargetClass:

@@ -69,3 +69,22 @@ def test_agile_probability_rises_when_the_target_weaves(weave_runs):
     weave = (t > 90.0) & weave_runs[0].manoeuvring
     assert p[:, weave].mean() > 2.0 * p[:, straight].mean()
     assert p[:, weave].mean() > 0.2
+
+
+@pytest.mark.parametrize("method", ["imm", "mm-rangerate"])
+def test_derived_conversions_give_the_same_update(weave_runs, method):
+    """``derive`` (the driver converts every plot of a file once) changes nothing: an update
+    on plots carrying the converted positions is the update that converts them itself."""
+    from dataclasses import replace
+
+    plots = labelled_runs(weave_runs)
+    m = registry.build(method, {}, d=2, range_rate=True)
+    flt = m.filter
+    first, nxt = plots.take(np.arange(4)), plots.take(np.arange(4, 8))  # later plots
+    x0, P0 = m.initiate(first)
+    state = flt.predict(flt.initiate(first.t, x0, P0), nxt.t)
+    plain = flt.update(state, nxt)
+    with_derived = flt.update(state, replace(nxt, derived=flt.derive(nxt)))
+    assert nxt.derived == {} and set(flt.derive(nxt)) >= {"z", "R"}
+    for a, b in zip(plain.iter_arrays(), with_derived.iter_arrays(), strict=True):
+        assert np.array_equal(a, b, equal_nan=True)

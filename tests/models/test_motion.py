@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from seatrack.kalman import predict_core
 from seatrack.models import ConstantAcceleration
 from seatrack.models import ConstantVelocity
 from seatrack.models import CoordinatedTurn
@@ -12,6 +13,7 @@ from seatrack.models.motion import ct_noise
 from seatrack.models.motion import ct_transition
 from seatrack.models.motion import cv_noise
 from seatrack.models.motion import cv_noise_discrete
+from seatrack.models.motion import cv_predict_core
 from seatrack.models.motion import cv_transition
 from seatrack.simulate import Leg
 from seatrack.simulate import trajectory
@@ -114,3 +116,19 @@ def test_model_objects_names_and_shapes():
     assert CoordinatedTurn(d=2).state_names == ("x", "y", "vx", "vy", "w")
     with pytest.raises(ValueError, match="5 .2-D. or 7"):
         ct_transition(np.zeros(4), 1.0)
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_cv_predict_core_is_the_general_prediction_bit_for_bit(d):
+    rng = np.random.default_rng(d)
+    n = 2 * d
+    for T in (0.0, 0.37, 2.0, 61.5):
+        x = rng.normal(size=n) * 1e3
+        A = rng.normal(size=(n, n))
+        P = A @ A.T + np.eye(n)
+        Q = cv_noise(T, 3.7, d) + rng.normal(size=(n, n)) * 1e-9  # not exactly symmetric
+        want_x, want_P = np.empty(n), np.empty((n, n))
+        predict_core(x, P, cv_transition(T, d), Q, want_x, want_P)
+        got_x, got_P = np.empty(n), np.empty((n, n))
+        cv_predict_core(x, P, T, Q, got_x, got_P, np.empty((n, n)), d)
+        assert np.array_equal(got_x, want_x) and np.array_equal(got_P, want_P)

@@ -126,6 +126,8 @@ class Plots:
     sensor_vel : (N, 3) m/s -- sensor velocity
     line : (N,) int -- input line of each plot (-1 when not read from a file)
     track : (N,) str, or None -- track label of each plot (labelled files only)
+    derived : per-plot quantities a filter computed once for all plots (leading axis
+        ``N``; :meth:`RecursiveFilter.derive`), carried along by :meth:`take`
     """
 
     t: FloatArray
@@ -137,6 +139,7 @@ class Plots:
     sensor_vel: FloatArray = field(default_factory=lambda: np.zeros((0, 3)))
     line: IntArray = field(default_factory=lambda: np.zeros(0, np.int64))
     track: NDArray[Any] | None = None
+    derived: Mapping[str, NDArray[Any]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         n = int(np.shape(self.t)[0])
@@ -186,6 +189,7 @@ class Plots:
             self.sensor_vel[ix],
             self.line[ix],
             sub(self.track),
+            {k: v[ix] for k, v in self.derived.items()},
         )
 
     def horizontal(self) -> Plots:
@@ -194,7 +198,7 @@ class Plots:
         if self.elevation is None:
             return self
         rng = self.range * np.cos(self.elevation)
-        return dataclasses.replace(self, range=rng, elevation=None)
+        return dataclasses.replace(self, range=rng, elevation=None, derived={})
 
     def polar(self, range_rate: bool = True) -> FloatArray:
         """Measurement vectors ``(N, m)``: range, azimuth, [elevation], [range rate]."""
@@ -555,6 +559,11 @@ class RecursiveFilter(Protocol):
         """Output columns, one value per track: :data:`COMMON_COLUMNS` then the method's own."""
         ...
 
+    # Optional: ``derive(plots) -> dict[str, array]``, per-plot quantities that do not depend
+    # on the state (e.g. converted positions), computed once for all plots of a file by
+    # :func:`seatrack.filters.driver.run_tracks` and handed back in ``Plots.derived``; an
+    # ``update`` / ``innovation`` must give the same result without them.
+
 
 # ---------------------------------------------------------------------------
 # Initiation: one plot or two plots -> Cartesian Gaussian
@@ -698,18 +707,18 @@ def finish_update(
     good = np.isfinite(log_likelihood) & np.isfinite(x).all(-1) & np.isfinite(P).all((-1, -2))
     if ok is not None:
         good &= ok
-    status = np.where(good, PlotStatus.UPDATED, PlotStatus.REJECTED).astype(np.int8)
+    everyone = bool(good.all())  # every plot updated its track: the usual scan
     nan = np.full(good.shape, np.nan)
+    if everyone:
+        status = np.full(good.shape, PlotStatus.UPDATED, np.int8)
+        nis_o, ll_o = np.asarray(nis, dtype=float), np.asarray(log_likelihood, dtype=float)
+    else:
+        status = np.where(good, PlotStatus.UPDATED, PlotStatus.REJECTED).astype(np.int8)
+        nis_o, ll_o = np.where(good, nis, nan), np.where(good, log_likelihood, nan)
     new = TrackState(
-        np.asarray(t, dtype=float),
-        x,
-        P,
-        np.where(good, nis, nan),
-        np.where(good, log_likelihood, nan),
-        status,
-        {**prior.aux, **(aux or {})},
+        np.asarray(t, dtype=float), x, P, nis_o, ll_o, status, {**prior.aux, **(aux or {})}
     )
-    if good.all():
+    if everyone:
         return new
     kept = prior.replace(nis=nan, log_likelihood=nan.copy(), status=status, t=new.t)
     return kept.where(good, new)

@@ -171,9 +171,21 @@ class CVCTIMM:
         x, P = self.imm.combined(pr)
         return predicted(state, tt, x, P, {"X": pr.X, "PP": pr.P, "mu": pr.mu})
 
+    def derive(self, plots: Plots) -> dict[str, FloatArray]:
+        """The converted positions and covariances of all plots at once (they do not depend
+        on the state): ``z``, ``R`` and the range-rate model's ``sensor`` of
+        :meth:`_measurement`, which then only takes them."""
+        z, R, sensor = self._measurement(plots)
+        out = {"z": z, "R": R}
+        return out if sensor is None else out | {"sensor": sensor}
+
     def _measurement(self, plots: Plots) -> tuple[FloatArray, FloatArray, Any]:
         """Converted positions (with range rate when used), their covariances, the sensor
-        state of the range-rate model (None without range rate)."""
+        state of the range-rate model (None without range rate); from ``plots.derived``
+        when :meth:`derive` filled it."""
+        got = plots.derived
+        if "z" in got:
+            return got["z"], got["R"], got.get("sensor")
         sn, d = self.sensor, self.d
         z, R = converted_positions(plots, sn, self.config.conversion)
         if not self.range_rate or plots.range_rate is None:

@@ -23,6 +23,7 @@ aircraft and fighters, whose worst innovations there are lags of a diverging fil
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from typing import Any
@@ -80,6 +81,9 @@ def run_tracks(
         return {}
     ti = np.asarray(track_index, dtype=np.int64)
     T = int(ti.max()) + 1
+    derive = getattr(flt, "derive", None)
+    if derive is not None:  # state-independent per-plot quantities, once for the file
+        plots = dataclasses.replace(plots, derived=derive(plots))
     # rank of each plot within its track (stable: input order)
     order = np.argsort(ti, kind="stable")
     starts = np.searchsorted(ti[order], np.arange(T))

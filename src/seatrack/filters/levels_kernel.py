@@ -35,10 +35,10 @@ from seatrack.kalman import cholesky_m
 from seatrack.kalman import forward_core
 from seatrack.kalman import forward_m
 from seatrack.kalman import matmul_core
-from seatrack.kalman import predict_core
 from seatrack.kalman import wrap_angle
 from seatrack.models.measurement import polar_core
 from seatrack.models.motion import along_track_core
+from seatrack.models.motion import cv_predict_core
 
 __all__ = [
     "Rule",
@@ -305,6 +305,7 @@ def level_predict_core(
     X0 = np.empty((M, n))
     P0 = np.empty((M, n, n))
     Q = np.empty((n, n))
+    FP = np.empty((n, n))
     A = np.eye(d)
     zero = np.zeros(M)
     mu_c = np.empty(M)
@@ -321,7 +322,7 @@ def level_predict_core(
                 for e in range(n):
                     blk = Q1[bf, (a // d) * d, (e // d) * d]
                     Q[a, e] = q[bq, j] * (blk * A[a % d, e % d])
-            predict_core(X0[j], P0[j], F[bf], Q, Xo[b, j], PPo[b, j])
+            cv_predict_core(X0[j], P0[j], F[bf, 0, d], Q, Xo[b, j], PPo[b, j], FP, d)
         combine_core(Xo[b], PPo[b], c[b], zero, out, mu_c, x[b], P[b])
 
 

@@ -105,6 +105,10 @@ class TurnState(IntEnum):
         return self.name.lower()
 
 
+#: the ``turn_state`` output labels, indexed by :class:`TurnState` value
+_TURN_LABELS = np.array([s.label for s in TurnState])
+
+
 # ---------------------------------------------------------------------------
 # Configuration
 # ---------------------------------------------------------------------------
@@ -583,14 +587,13 @@ def heading_columns(state: TrackState, d: int) -> dict[str, NDArray[Any]]:
     a = state.aux
     v = state.x[:, d:]
     started = np.isfinite(a["ht"])
-    labels = np.array([s.label for s in TurnState])
     std = np.sqrt(np.maximum(a["hP"][:, 1, 1], 0.0))
     return {
         "speed_mps": np.hypot(v[:, 0], v[:, 1]),
         "heading_deg": np.degrees(bearing(v[:, 0], v[:, 1])),
         "turn_rate_dps": np.degrees(np.where(started, a["hs"][:, 1], np.nan)),
         "turn_rate_std_dps": np.degrees(np.where(started, std, np.nan)),
-        "turn_state": labels[a["turn_state"]],
+        "turn_state": _TURN_LABELS[a["turn_state"]],
     }
 
 

@@ -114,3 +114,39 @@ def test_in_layout_reads_the_same_components_of_a_padded_state():
     assert in_layout(object(), 5) is None
     with pytest.raises(ValueError, match="cannot read"):
         in_layout(Position(n=6, pos=(0, 1, 2)), 4)
+
+
+def test_sensor_frame_is_the_position_along_and_across_the_measured_azimuth():
+    """The near-sensor frame of a plot (azimuth ``theta``): rows 0 and 1 become the
+    position along ``u = (sin, cos)`` and across ``v = (cos, -sin)``, linear (Jacobian
+    checked numerically); the plot's own point is ``[range, 0]``; the range-rate row stays
+    the polar one."""
+    from seatrack.models.measurement import polar_measurement
+    from seatrack.models.measurement import sensor_frame_core
+
+    rng = np.random.default_rng(5)
+    x = np.concatenate([rng.normal(0, 40, (6, 2)), rng.normal(0, 10, (6, 2))], -1)
+    s = np.concatenate([rng.normal(0, 5, (6, 2)), rng.normal(0, 2, (6, 2))], -1)
+    for theta in (0.0, 0.3, 2.0, 4.5):
+
+        def h(state, k, theta=theta):
+            hx, H = polar_measurement(state[None], s[k : k + 1], 2, True)
+            sensor_frame_core(state[None], s[k : k + 1], theta, hx, H)
+            return hx[0]
+
+        hx, H = polar_measurement(x, s, 2, True)
+        polar = hx.copy()
+        sensor_frame_core(x, s, theta, hx, H)
+        d = x[:, :2] - s[:, :2]
+        u, v = np.array([np.sin(theta), np.cos(theta)]), np.array([np.cos(theta), -np.sin(theta)])
+        np.testing.assert_allclose(hx[:, 0], d @ u, rtol=1e-14, atol=1e-12)
+        np.testing.assert_allclose(hx[:, 1], d @ v, rtol=1e-14, atol=1e-12)
+        assert np.array_equal(hx[:, 2], polar[:, 2])
+        for k in range(6):
+            J = numerical_jacobian(lambda state, k=k: h(state, k), x[k])
+            np.testing.assert_allclose(H[k], J, rtol=1e-6, atol=1e-8)
+            assert np.array_equal(H[k, :2, :2], np.array([u, v])) and not H[k, :2, 2:].any()
+        on_plot = np.concatenate([s[0, :2] + 37.0 * u, [3.0, -1.0]])[None]
+        hp, Hp = polar_measurement(on_plot, s[:1], 2, True)
+        sensor_frame_core(on_plot, s[:1], theta, hp, Hp)
+        np.testing.assert_allclose(hp[0, :2], [37.0, 0.0], atol=1e-12)

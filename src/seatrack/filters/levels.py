@@ -132,6 +132,11 @@ _EPS_RANGE = (1e-3, 0.4)
 #: and cost at most 0.2 %; 3e3 cost up to 4.6 %, and (ratio 0.5) a sixth rung at 1e3 or a
 #: top pair (3e3, 3e4) up to 13 % and 1.8 % (docs/defaults.md)
 LADDER = (1e-4, 1e-2, 1.0, 1e2, 5e3)
+#: a 2-D plot is updated in the frame of its azimuth (linear in the position) when its
+#: range or the prediction's is below this many times the larger of the prediction's
+#: position std and the range std (the polar Jacobian's error over the prior grows as
+#: (std / range)^2: 4 % at 5)
+NEAR_SENSOR_SIGMAS = 5.0
 
 
 # ---------------------------------------------------------------------------
@@ -584,13 +589,14 @@ class LevelIMM(ConfiguredFilter, CartesianState):
         G, logp, k = self._patterns(a["eps"])
         Xo, PPo, ll = np.empty_like(X), np.empty_like(PP), np.empty((B, M))
         o, Y, H = np.empty((B, M, m)), np.empty((B, M, m)), np.empty((B, M, m, n))
-        level_update_core(X, PP, z, ok, s, self.d, self.range_rate, self.angular, self.r,
+        near = self._near_sensor(state, z, s, ok)
+        level_update_core(X, PP, z, ok, near, s, self.d, self.range_rate, self.angular, self.r,
                           self._rule, G, logp, k, self._par, self._thresholds(a["eps"]), Xo,
                           PPo, ll, o, Y, H, *dims(n, m))  # fmt: skip
         mu, x, P = np.empty((B, M)), np.empty((B, n)), np.empty((B, n, n))
         tot, outl, nis = np.empty(B), np.empty((B, m)), np.empty(B)
         level_combine_core(
-            Xo, PPo, a["mu"], ll, o, ok, np.ascontiguousarray(state.x),
+            Xo, PPo, a["mu"], ll, o, ok, near, np.ascontiguousarray(state.x),
             np.ascontiguousarray(state.P), z, s, self.d, self.range_rate, self.angular, self.r,
             mu, x, P, tot, outl, nis,
         )  # fmt: skip
@@ -598,6 +604,22 @@ class LevelIMM(ConfiguredFilter, CartesianState):
         aux |= self._usual_level(a, mu, state.t)
         aux |= self._after_update(state.replace(x=x, P=P, aux=aux))
         return finish_update(state, x, P, nis, tot, state.t, aux, ok)
+
+    def _near_sensor(
+        self, state: TrackState, z: FloatArray, s: FloatArray, ok: NDArray[np.bool_]
+    ) -> NDArray[np.bool_]:
+        """The 2-D plots next to the sensor, updated in the frame of their azimuth
+        (:func:`seatrack.models.measurement.sensor_frame_core`): the plot's or the
+        prediction's range below :data:`NEAR_SENSOR_SIGMAS` times the larger of the
+        prediction's position std and the range std -- where the polar Jacobian no longer
+        holds over the prior's extent."""
+        if self.d != 2:
+            return np.zeros(len(ok), dtype=bool)
+        x, P = state.x, state.P
+        predicted_range = np.hypot(x[:, 0] - s[:, 0], x[:, 1] - s[:, 1])
+        spread = np.maximum(np.sqrt(np.maximum(P[:, 0, 0] + P[:, 1, 1], 0.0)), np.sqrt(self.r[0]))
+        with np.errstate(invalid="ignore"):
+            return ok & (np.minimum(z[:, 0], predicted_range) < NEAR_SENSOR_SIGMAS * spread)
 
     def _thresholds(self, eps: FloatArray) -> FloatArray:
         """The Huber thresholds or Student-t degrees of freedom ``(B, m)`` or ``(1, m)`` of

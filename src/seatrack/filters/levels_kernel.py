@@ -37,6 +37,7 @@ from seatrack.kalman import forward_m
 from seatrack.kalman import matmul_core
 from seatrack.kalman import wrap_angle
 from seatrack.models.measurement import polar_core
+from seatrack.models.measurement import sensor_frame_core
 from seatrack.models.motion import along_track_core
 from seatrack.models.motion import cv_predict_core
 
@@ -414,20 +415,48 @@ def _reweighted(x, P, y, r, rule, par, thr, xo, Po, ws, rw, e, tmp, dx, tn, tm):
         xo[a] = x[a] + dx[a]
 
 
+@njit(cache=True, inline="always")
+def _plot_frame(
+    Xb, sr, d, rr, zin, okb, nearb, r, angular, hx, H, zb, rb, wrap
+):  # pragma: no cover
+    """The predicted plots ``hx (M, m)`` and Jacobians ``H`` of the states ``Xb (M, n)``
+    (sensor rows ``sr``), the plot ``zb`` in the same frame, its variances ``rb`` and the
+    channels to wrap: polar (:func:`seatrack.models.measurement.polar_core`), or -- for a
+    plot next to the sensor (``nearb``) -- range and azimuth replaced by the linear position
+    in the frame of the measured azimuth
+    (:func:`seatrack.models.measurement.sensor_frame_core`): the plot is ``[range, 0]``,
+    the across variance ``(range^2 + sigma_r^2) sigma_az^2``. An unusable plot
+    (``okb`` false) is replaced by the first state's prediction."""
+    polar_core(Xb, sr, d, rr, hx, H)
+    for a in range(zb.shape[0]):
+        rb[a] = r[a]
+        wrap[a] = angular[a] > 0.0
+        h0 = hx[0, a]
+        zb[a] = zin[a] if okb else (h0 if np.isfinite(h0) else 0.0)
+    if nearb:
+        sensor_frame_core(Xb, sr, zin[1], hx, H)
+        zb[1] = 0.0
+        rb[1] = (zin[0] * zin[0] + r[0]) * r[1]
+        wrap[1] = False
+
+
 @njit(cache=True)
-def _nis(x, P, z, s, d, rr, angular, r, hx, H, y, HP, A, S, L, w):  # pragma: no cover
-    """``y^T S^-1 y`` of plot ``z`` against the combined prediction ``(x, P)`` (the other
-    arguments: scratch)."""
+def _nis(
+    x, P, z, nearb, s, d, rr, angular, r, hx, H, y, HP, A, S, L, w, zb, rb, wrap
+):  # pragma: no cover
+    """``y^T S^-1 y`` of plot ``z`` against the combined prediction ``(x, P)``, in the
+    plot's frame (:func:`_plot_frame`; the other arguments: scratch)."""
     m = z.shape[0]
     n = x.shape[0]
-    polar_core(x.reshape((1, n)), s.reshape((1, s.shape[0])), d, rr, hx, H)
+    _plot_frame(x.reshape((1, n)), s.reshape((1, s.shape[0])), d, rr, z, True, nearb, r,
+                angular, hx, H, zb, rb, wrap)  # fmt: skip
     for a in range(m):
-        v = z[a] - hx[0, a]
-        y[a] = wrap_angle(v) if angular[a] > 0.0 else v
+        v = zb[a] - hx[0, a]
+        y[a] = wrap_angle(v) if wrap[a] else v
     matmul_core(H[0], P, HP)
     matmul_core(HP, H[0].T, A)
     for a in range(m):
-        A[a, a] += r[a]
+        A[a, a] += rb[a]
     for a in range(m):
         for c in range(m):
             S[a, c] = 0.5 * (A[a, c] + A[c, a])
@@ -443,20 +472,21 @@ def _nis(x, P, z, s, d, rr, angular, r, hx, H, y, HP, A, S, L, w):  # pragma: no
 
 @njit(cache=True)
 def level_update_core(
-    X, PP, z, ok, s, d, rr, angular, r, rule, G, logp, k, par, thr, Xo, PPo, ll, o, Y, Hs, tn,
-    tm,
+    X, PP, z, ok, near, s, d, rr, angular, r, rule, G, logp, k, par, thr, Xo, PPo, ll, o, Y, Hs,
+    tn, tm,
 ):  # pragma: no cover - compiled  # fmt: skip
     """The update of every level of every track.
 
     Inputs: level states ``X (B, M, n)``, ``PP``; plots ``z (B, m)`` (range, azimuth,
     [elevation], [range rate]; rad, m/s) with ``ok (B,)`` false for unusable ones (they
     are updated on the level-0 prediction instead, without warnings; the caller rejects
-    them), sensor ``s (B, 2d)``; ``angular (m,)`` 1 for the wrapped channels; nominal
-    variances ``r (m,)``; the ``rule`` (:class:`Rule`), outlier patterns ``G (C, m)`` with
-    per-track log priors ``logp (B, C)`` (or one row ``(1, C)`` for all) and scales
-    ``k (m,)``, the rule's parameters ``par`` and the Huber thresholds / Student-t degrees
-    of freedom of each track's channels ``thr (B, m)`` (or one row for all; unused by the
-    other rules); ``tn``, ``tm`` = :func:`dims`.
+    them) and ``near (B,)`` true for the 2-D plots next to the sensor (updated in the frame
+    of their azimuth, :func:`_plot_frame`), sensor ``s (B, 2d)``; ``angular (m,)`` 1 for
+    the wrapped channels; nominal variances ``r (m,)``; the ``rule`` (:class:`Rule`),
+    outlier patterns ``G (C, m)`` with per-track log priors ``logp (B, C)`` (or one row
+    ``(1, C)`` for all) and scales ``k (m,)``, the rule's parameters ``par`` and the Huber
+    thresholds / Student-t degrees of freedom of each track's channels ``thr (B, m)`` (or
+    one row for all; unused by the other rules); ``tn``, ``tm`` = :func:`dims`.
 
     Outputs: updated levels ``Xo``, ``PPo``, their log-likelihoods ``ll (B, M)`` (the
     contaminated-Gaussian one of the nominal ``r`` for every rule; zero for unusable
@@ -470,6 +500,8 @@ def level_update_core(
     hx = np.empty((M, m))
     sr = np.empty((M, s.shape[1]))
     zb = np.empty(m)
+    rb = np.empty(m)
+    wrap = np.empty(m, np.bool_)
     rw = np.empty(m)
     e = np.empty(m)
     tmp = np.empty(m)
@@ -480,36 +512,33 @@ def level_update_core(
         for j in range(M):
             sr[j] = s[b]
         H = Hs[b]
-        polar_core(X[b], sr, d, rr, hx, H)
-        for a in range(m):
-            h0 = hx[0, a]
-            zb[a] = z[b, a] if ok[b] else (h0 if np.isfinite(h0) else 0.0)
+        _plot_frame(X[b], sr, d, rr, z[b], ok[b], near[b], r, angular, hx, H, zb, rb, wrap)
         for j in range(M):
             y = Y[b, j]
             for a in range(m):
                 v = zb[a] - hx[j, a]
-                y[a] = wrap_angle(v) if angular[a] > 0.0 else v
+                y[a] = wrap_angle(v) if wrap[a] else v
             P = PP[b, j]
             _hph_into(P, H[j], ws)  # P H^T, H P H^T: shared by the rule and the likelihood
             if rule == 0:
-                v = mixture_given(P, ws[0], ws[1], y, r, G, lp, k, Xo[b, j], PPo[b, j], o[b, j],
+                v = mixture_given(P, ws[0], ws[1], y, rb, G, lp, k, Xo[b, j], PPo[b, j], o[b, j],
                                   ws, tn, tm)  # fmt: skip
                 for a in range(n):
                     Xo[b, j, a] = X[b, j, a] + Xo[b, j, a]
             elif rule == 1:
-                v = _ramazanov(X[b, j], P, y, r, G, lp, k, par, Xo[b, j], PPo[b, j], o[b, j], ws,
+                v = _ramazanov(X[b, j], P, y, rb, G, lp, k, par, Xo[b, j], PPo[b, j], o[b, j], ws,
                                rw, tmp, tn, tm)  # fmt: skip
             else:
-                _reweighted(X[b, j], P, y, r, rule, par, th, Xo[b, j], PPo[b, j], ws, rw, e, tmp,
+                _reweighted(X[b, j], P, y, rb, rule, par, th, Xo[b, j], PPo[b, j], ws, rw, e, tmp,
                             dx, tn, tm)  # fmt: skip
                 # the contaminated likelihood and outlier probabilities (nominal r)
-                v = mixture_loglik(ws[1], y, r, G, lp, k, o[b, j], ws, tm)
+                v = mixture_loglik(ws[1], y, rb, G, lp, k, o[b, j], ws, tm)
             ll[b, j] = v if ok[b] else 0.0
 
 
 @njit(cache=True)
 def level_combine_core(
-    Xo, PPo, mu, ll, o, ok, xp, Pp, z, s, d, rr, angular, r, muo, x, P, tot, outl, nis
+    Xo, PPo, mu, ll, o, ok, near, xp, Pp, z, s, d, rr, angular, r, muo, x, P, tot, outl, nis
 ):  # pragma: no cover - compiled  # fmt: skip
     """Level probabilities ``muo`` from the predicted ``mu (B, M)`` and the levels'
     log-likelihoods ``ll``, the combined ``x``, ``P`` of the updated levels ``Xo``, ``PPo``,
@@ -524,6 +553,7 @@ def level_combine_core(
     H = np.empty((1, m, n))
     y = np.empty(m)
     HP, A, S, L, w = np.empty((m, n)), np.empty((m, m)), np.empty((m, m)), np.empty((m, m)), y * 0
+    zb, rb, wrap = np.empty(m), np.empty(m), np.empty(m, np.bool_)
     for b in range(B):
         tot[b] = combine_core(Xo[b], PPo[b], mu[b], ll[b], out, muo[b], x[b], P[b])
         for a in range(m):
@@ -532,6 +562,7 @@ def level_combine_core(
                 v += muo[b, j] * o[b, j, a]
             outl[b, a] = v
         if ok[b]:
-            nis[b] = _nis(xp[b], Pp[b], z[b], s[b], d, rr, angular, r, hx, H, y, HP, A, S, L, w)
+            nis[b] = _nis(xp[b], Pp[b], z[b], near[b], s[b], d, rr, angular, r, hx, H, y, HP, A,
+                          S, L, w, zb, rb, wrap)  # fmt: skip
         else:
             nis[b] = np.nan

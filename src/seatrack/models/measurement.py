@@ -49,6 +49,7 @@ __all__ = [
     "range_rate_jacobian",
     "polar_measurement",
     "polar_core",
+    "sensor_frame_core",
 ]
 
 
@@ -361,6 +362,28 @@ def polar_core(x, s, d, rr, hx, H):  # pragma: no cover - compiled
                 p_k = x[b, k] - s[b, k]
                 H[b, m, k] = ((x[b, d + k] - s[b, d + k]) - rdot * p_k / r) / r
                 H[b, m, d + k] = p_k / r
+
+
+@njit(cache=True, inline="always")
+def sensor_frame_core(x, s, theta, hx, H):  # pragma: no cover - compiled
+    """Replace the range and azimuth rows of :func:`polar_core`'s ``hx``, ``H`` (2-D states)
+    by the position in the frame of a plot's measured azimuth ``theta`` (rad, clockwise
+    from North): along the ray ``u = (sin theta, cos theta)`` and across it
+    ``v = (cos theta, -sin theta)``, ``h = [u . (p - s), v . (p - s)]`` -- linear in the
+    state. The plot itself is ``[range, 0]`` in that frame, with noise variances
+    ``sigma_r^2`` along and about ``(range^2 + sigma_r^2) sigma_theta^2`` across: the
+    update of a plot next to the sensor, where the polar Jacobian fails (its bearing
+    swings by tens of degrees over the prior's extent)."""
+    st, ct = math.sin(theta), math.cos(theta)
+    for b in range(x.shape[0]):
+        dx, dy = x[b, 0] - s[b, 0], x[b, 1] - s[b, 1]
+        hx[b, 0] = st * dx + ct * dy
+        hx[b, 1] = ct * dx - st * dy
+        for j in range(H.shape[2]):
+            H[b, 0, j] = 0.0
+            H[b, 1, j] = 0.0
+        H[b, 0, 0], H[b, 0, 1] = st, ct
+        H[b, 1, 0], H[b, 1, 1] = ct, -st
 
 
 def polar_measurement(

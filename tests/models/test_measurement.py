@@ -116,37 +116,42 @@ def test_in_layout_reads_the_same_components_of_a_padded_state():
         in_layout(Position(n=6, pos=(0, 1, 2)), 4)
 
 
-def test_sensor_frame_is_the_position_along_and_across_the_measured_azimuth():
-    """The near-sensor frame of a plot (azimuth ``theta``): rows 0 and 1 become the
-    position along ``u = (sin, cos)`` and across ``v = (cos, -sin)``, linear (Jacobian
-    checked numerically); the plot's own point is ``[range, 0]``; the range-rate row stays
-    the polar one."""
+@pytest.mark.parametrize("d", [2, 3])
+def test_sensor_frame_is_the_position_along_and_across_the_measured_direction(d):
+    """The near-sensor frame of a plot (azimuth ``az``, elevation ``el``): the range,
+    azimuth [and elevation] rows become the position along ``u``, across ``v`` (horizontal)
+    [and ``w``] -- an orthonormal frame, linear (Jacobian checked numerically); the plot's
+    own point is ``[range, 0, (0)]``; the range-rate row stays the polar one."""
     from seatrack.models.measurement import polar_measurement
     from seatrack.models.measurement import sensor_frame_core
 
-    rng = np.random.default_rng(5)
-    x = np.concatenate([rng.normal(0, 40, (6, 2)), rng.normal(0, 10, (6, 2))], -1)
-    s = np.concatenate([rng.normal(0, 5, (6, 2)), rng.normal(0, 2, (6, 2))], -1)
-    for theta in (0.0, 0.3, 2.0, 4.5):
+    rng = np.random.default_rng(5 + d)
+    x = np.concatenate([rng.normal(0, 40, (6, d)), rng.normal(0, 10, (6, d))], -1)
+    s = np.concatenate([rng.normal(0, 5, (6, d)), rng.normal(0, 2, (6, d))], -1)
+    for az, el in ((0.0, 0.0), (0.3, 0.2), (2.0, -0.4), (4.5, 1.3)):
+        el = el if d == 3 else 0.0
 
-        def h(state, k, theta=theta):
-            hx, H = polar_measurement(state[None], s[k : k + 1], 2, True)
-            sensor_frame_core(state[None], s[k : k + 1], theta, hx, H)
+        def h(state, k, az=az, el=el):
+            hx, H = polar_measurement(state[None], s[k : k + 1], d, True)
+            sensor_frame_core(state[None], s[k : k + 1], d, az, el, hx, H)
             return hx[0]
 
-        hx, H = polar_measurement(x, s, 2, True)
+        hx, H = polar_measurement(x, s, d, True)
         polar = hx.copy()
-        sensor_frame_core(x, s, theta, hx, H)
-        d = x[:, :2] - s[:, :2]
-        u, v = np.array([np.sin(theta), np.cos(theta)]), np.array([np.cos(theta), -np.sin(theta)])
-        np.testing.assert_allclose(hx[:, 0], d @ u, rtol=1e-14, atol=1e-12)
-        np.testing.assert_allclose(hx[:, 1], d @ v, rtol=1e-14, atol=1e-12)
-        assert np.array_equal(hx[:, 2], polar[:, 2])
+        sensor_frame_core(x, s, d, az, el, hx, H)
+        u = np.array([np.cos(el) * np.sin(az), np.cos(el) * np.cos(az), np.sin(el)])
+        v = np.array([np.cos(az), -np.sin(az), 0.0])
+        w = np.array([-np.sin(el) * np.sin(az), -np.sin(el) * np.cos(az), np.cos(el)])
+        frame = np.array([u, v, w])[:d, :d]
+        np.testing.assert_allclose(frame @ frame.T, np.eye(d), atol=1e-15)
+        rel = x[:, :d] - s[:, :d]
+        np.testing.assert_allclose(hx[:, :d], rel @ frame.T, rtol=1e-13, atol=1e-12)
+        assert np.array_equal(hx[:, d], polar[:, d])
         for k in range(6):
             J = numerical_jacobian(lambda state, k=k: h(state, k), x[k])
             np.testing.assert_allclose(H[k], J, rtol=1e-6, atol=1e-8)
-            assert np.array_equal(H[k, :2, :2], np.array([u, v])) and not H[k, :2, 2:].any()
-        on_plot = np.concatenate([s[0, :2] + 37.0 * u, [3.0, -1.0]])[None]
-        hp, Hp = polar_measurement(on_plot, s[:1], 2, True)
-        sensor_frame_core(on_plot, s[:1], theta, hp, Hp)
-        np.testing.assert_allclose(hp[0, :2], [37.0, 0.0], atol=1e-12)
+            assert np.array_equal(H[k, :d, :d], frame) and not H[k, :d, d:].any()
+        on_plot = np.concatenate([s[0, :d] + 37.0 * u[:d], np.ones(d)])[None]
+        hp, Hp = polar_measurement(on_plot, s[:1], d, True)
+        sensor_frame_core(on_plot, s[:1], d, az, el, hp, Hp)
+        np.testing.assert_allclose(hp[0, :d], [37.0] + [0.0] * (d - 1), atol=1e-12)

@@ -132,7 +132,7 @@ _EPS_RANGE = (1e-3, 0.4)
 #: and cost at most 0.2 %; 3e3 cost up to 4.6 %, and (ratio 0.5) a sixth rung at 1e3 or a
 #: top pair (3e3, 3e4) up to 13 % and 1.8 % (docs/defaults.md)
 LADDER = (1e-4, 1e-2, 1.0, 1e2, 5e3)
-#: a 2-D plot is updated in the frame of its azimuth (linear in the position) when its
+#: a plot is updated in the frame of its direction (linear in the position) when its
 #: range or the prediction's is below this many times the larger of the prediction's
 #: position std and the range std (the polar Jacobian's error over the prior grows as
 #: (std / range)^2: 4 % at 5)
@@ -608,16 +608,16 @@ class LevelIMM(ConfiguredFilter, CartesianState):
     def _near_sensor(
         self, state: TrackState, z: FloatArray, s: FloatArray, ok: NDArray[np.bool_]
     ) -> NDArray[np.bool_]:
-        """The 2-D plots next to the sensor, updated in the frame of their azimuth
+        """The plots next to the sensor, updated in the frame of their direction
         (:func:`seatrack.models.measurement.sensor_frame_core`): the plot's or the
         prediction's range below :data:`NEAR_SENSOR_SIGMAS` times the larger of the
         prediction's position std and the range std -- where the polar Jacobian no longer
         holds over the prior's extent."""
-        if self.d != 2:
-            return np.zeros(len(ok), dtype=bool)
-        x, P = state.x, state.P
-        predicted_range = np.hypot(x[:, 0] - s[:, 0], x[:, 1] - s[:, 1])
-        spread = np.maximum(np.sqrt(np.maximum(P[:, 0, 0] + P[:, 1, 1], 0.0)), np.sqrt(self.r[0]))
+        d = self.d
+        rel = state.x[:, :d] - s[:, :d]
+        predicted_range = np.sqrt(np.einsum("bi,bi->b", rel, rel))
+        var = np.trace(state.P[:, :d, :d], axis1=1, axis2=2)
+        spread = np.maximum(np.sqrt(np.maximum(var, 0.0)), np.sqrt(self.r[0]))
         with np.errstate(invalid="ignore"):
             return ok & (np.minimum(z[:, 0], predicted_range) < NEAR_SENSOR_SIGMAS * spread)
 

@@ -424,8 +424,9 @@ def _plot_frame(
     channels to wrap: polar (:func:`seatrack.models.measurement.polar_core`), or -- for a
     plot next to the sensor (``nearb``) -- range and azimuth replaced by the linear position
     in the frame of the measured azimuth
-    (:func:`seatrack.models.measurement.sensor_frame_core`): the plot is ``[range, 0]``,
-    the across variance ``(range^2 + sigma_r^2) sigma_az^2``. An unusable plot
+    (:func:`seatrack.models.measurement.sensor_frame_core`): the plot is
+    ``[range, 0, (0)]``, the across variances ``(range^2 + sigma_r^2) cos^2(el) sigma_az^2``
+    and ``(range^2 + sigma_r^2) sigma_el^2``. An unusable plot
     (``okb`` false) is replaced by the first state's prediction."""
     polar_core(Xb, sr, d, rr, hx, H)
     for a in range(zb.shape[0]):
@@ -434,10 +435,14 @@ def _plot_frame(
         h0 = hx[0, a]
         zb[a] = zin[a] if okb else (h0 if np.isfinite(h0) else 0.0)
     if nearb:
-        sensor_frame_core(Xb, sr, zin[1], hx, H)
-        zb[1] = 0.0
-        rb[1] = (zin[0] * zin[0] + r[0]) * r[1]
-        wrap[1] = False
+        el = zin[2] if d == 3 else 0.0
+        sensor_frame_core(Xb, sr, d, zin[1], el, hx, H)
+        spread = zin[0] * zin[0] + r[0]
+        ce = math.cos(el)
+        for a in range(1, d):
+            zb[a] = 0.0
+            wrap[a] = False
+            rb[a] = spread * (ce * ce * r[1] if a == 1 else r[2])
 
 
 @njit(cache=True)
@@ -480,7 +485,7 @@ def level_update_core(
     Inputs: level states ``X (B, M, n)``, ``PP``; plots ``z (B, m)`` (range, azimuth,
     [elevation], [range rate]; rad, m/s) with ``ok (B,)`` false for unusable ones (they
     are updated on the level-0 prediction instead, without warnings; the caller rejects
-    them) and ``near (B,)`` true for the 2-D plots next to the sensor (updated in the frame
+    them) and ``near (B,)`` true for the plots next to the sensor (updated in the frame
     of their azimuth, :func:`_plot_frame`), sensor ``s (B, 2d)``; ``angular (m,)`` 1 for
     the wrapped channels; nominal variances ``r (m,)``; the ``rule`` (:class:`Rule`),
     outlier patterns ``G (C, m)`` with per-track log priors ``logp (B, C)`` (or one row

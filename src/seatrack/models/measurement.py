@@ -365,25 +365,34 @@ def polar_core(x, s, d, rr, hx, H):  # pragma: no cover - compiled
 
 
 @njit(cache=True, inline="always")
-def sensor_frame_core(x, s, theta, hx, H):  # pragma: no cover - compiled
-    """Replace the range and azimuth rows of :func:`polar_core`'s ``hx``, ``H`` (2-D states)
-    by the position in the frame of a plot's measured azimuth ``theta`` (rad, clockwise
-    from North): along the ray ``u = (sin theta, cos theta)`` and across it
-    ``v = (cos theta, -sin theta)``, ``h = [u . (p - s), v . (p - s)]`` -- linear in the
-    state. The plot itself is ``[range, 0]`` in that frame, with noise variances
-    ``sigma_r^2`` along and about ``(range^2 + sigma_r^2) sigma_theta^2`` across: the
-    update of a plot next to the sensor, where the polar Jacobian fails (its bearing
-    swings by tens of degrees over the prior's extent)."""
-    st, ct = math.sin(theta), math.cos(theta)
+def sensor_frame_core(x, s, d, az, el, hx, H):  # pragma: no cover - compiled
+    """Replace the range, azimuth [and elevation] rows of :func:`polar_core`'s ``hx``, ``H``
+    by the position in the frame of a plot's measured direction -- azimuth ``az`` (rad,
+    clockwise from North) and, in 3-D (``d = 3``), elevation ``el`` (rad, up; ignored in
+    2-D): along the ray ``u = (cos el sin az, cos el cos az, sin el)``, across it
+    horizontally ``v = (cos az, -sin az, 0)`` and, in 3-D, across it vertically
+    ``w = (-sin el sin az, -sin el cos az, cos el)``; ``h = [u, v, (w)] . (p - s)``, linear
+    in the state. The plot itself is ``[range, 0, (0)]`` in that frame, with noise
+    variances ``sigma_r^2`` along and about ``(range^2 + sigma_r^2) cos^2(el) sigma_az^2``,
+    ``(range^2 + sigma_r^2) sigma_el^2`` across: the update of a plot next to the sensor,
+    where the polar Jacobian fails (its bearing swings by tens of degrees over the prior's
+    extent)."""
+    sa, ca = math.sin(az), math.cos(az)
+    se, ce = (math.sin(el), math.cos(el)) if d == 3 else (0.0, 1.0)
     for b in range(x.shape[0]):
         dx, dy = x[b, 0] - s[b, 0], x[b, 1] - s[b, 1]
-        hx[b, 0] = st * dx + ct * dy
-        hx[b, 1] = ct * dx - st * dy
-        for j in range(H.shape[2]):
-            H[b, 0, j] = 0.0
-            H[b, 1, j] = 0.0
-        H[b, 0, 0], H[b, 0, 1] = st, ct
-        H[b, 1, 0], H[b, 1, 1] = ct, -st
+        dz = x[b, 2] - s[b, 2] if d == 3 else 0.0
+        for i in range(d):
+            for j in range(H.shape[2]):
+                H[b, i, j] = 0.0
+        H[b, 0, 0], H[b, 0, 1] = ce * sa, ce * ca
+        H[b, 1, 0], H[b, 1, 1] = ca, -sa
+        hx[b, 0] = ce * sa * dx + ce * ca * dy + se * dz
+        hx[b, 1] = ca * dx - sa * dy
+        if d == 3:
+            H[b, 0, 2] = se
+            H[b, 2, 0], H[b, 2, 1], H[b, 2, 2] = -se * sa, -se * ca, ce
+            hx[b, 2] = -se * sa * dx - se * ca * dy + ce * dz
 
 
 def polar_measurement(

@@ -435,3 +435,23 @@ def test_a_target_starting_on_the_sensor_is_tracked(name, d):
 
     got, reference = rmse(name), rmse("imm")
     assert got < reference and got < 10.0, (got, reference)
+
+
+@pytest.mark.parametrize("d", [2, 3])
+def test_gating_takes_near_plots_in_the_frame_the_update_uses(d):
+    """``innovation`` (what the multi-target tracker gates with) gives, for plots next to
+    the sensor and far from it alike, the NIS the update reports."""
+    plots, _ = _start_on_the_sensor(3, d)
+    far = _start_on_the_sensor(3, d)[0]
+    far = dataclasses.replace(far, range=far.range + 8e3)  # the same tracks 8 km out
+    flt = registry.build("robust-adaptive", {}, d=d).filter
+    for p in (plots, far):
+        first, nxt = p.take([0, 100, 200]), p.take([1, 101, 201])
+        x0, P0 = plot_gaussian(first, SENSOR, 20.0, False)
+        pred = flt.predict(flt.initiate(first.t, x0, P0), nxt.t)
+        near = flt._near_sensor(pred, nxt.polar(False), np.c_[nxt.sensor, nxt.sensor_vel],
+                                np.ones(3, bool))  # fmt: skip
+        assert near.all() if p is plots else not near.any()
+        y, S = flt.innovation(pred, nxt)
+        nis = np.einsum("bi,bi->b", y, np.linalg.solve(S, y[..., None])[..., 0])
+        np.testing.assert_allclose(flt.update(pred, nxt).nis, nis, rtol=1e-9)

@@ -155,3 +155,22 @@ def test_sensor_frame_is_the_position_along_and_across_the_measured_direction(d)
         hp, Hp = polar_measurement(on_plot, s[:1], d, True)
         sensor_frame_core(on_plot, s[:1], d, az, el, hp, Hp)
         np.testing.assert_allclose(hp[0, :d], [37.0] + [0.0] * (d - 1), atol=1e-12)
+
+
+def test_near_sensor_compares_ranges_with_the_position_spread():
+    from seatrack.models.measurement import NEAR_SENSOR_SIGMAS
+    from seatrack.models.measurement import near_sensor
+
+    x = np.array([[30.0, 40.0, 0, 0], [3e3, 4e3, 0, 0], [3e3, 4e3, 0, 0], [np.nan, 0, 0, 0]])
+    P = np.stack([np.diag([50.0**2, 50.0**2, 1, 1])] * 3 + [np.eye(4)])
+    sensor = np.zeros((4, 4))
+    plot_range = np.array([50.0, 5e3, 40.0, 50.0])
+    got = near_sensor(x, P, plot_range, sensor, 2, 20.0**2)
+    # 50 m < 5 x 70.7 m; 5 km is not; a plot at 40 m is, whatever the prediction; NaN is not
+    assert got.tolist() == [True, False, True, False]
+    # the range std sets the floor when the prediction is sharp
+    sharp = np.stack([np.eye(4) * 1e-6] * 4)
+    limit = NEAR_SENSOR_SIGMAS * 20.0
+    ranges = np.array([limit - 1, limit + 1, 1e3, 1e3])
+    got = near_sensor(np.zeros((4, 4)) + [1e4, 0, 0, 0], sharp, ranges, sensor, 2, 20.0**2)
+    assert got.tolist() == [True, False, False, False]

@@ -87,12 +87,14 @@ from seatrack.filters.base import wrap_angles
 from seatrack.filters.ekf import sensor_state
 from seatrack.filters.levels_kernel import Rule
 from seatrack.filters.levels_kernel import dims
+from seatrack.filters.levels_kernel import frame_innovation_core
 from seatrack.filters.levels_kernel import level_combine_core
 from seatrack.filters.levels_kernel import level_predict_core
 from seatrack.filters.levels_kernel import level_update_core
 from seatrack.filters.levels_kernel import mixture_core
 from seatrack.filters.robust_baselines import minimax_threshold_table
 from seatrack.filters.robust_baselines import student_t_dof
+from seatrack.models.measurement import near_sensor
 from seatrack.models.measurement import polar_measurement
 from seatrack.models.motion import ALONG_TRACK_RATIO
 from seatrack.models.motion import cv_matrices
@@ -132,11 +134,6 @@ _EPS_RANGE = (1e-3, 0.4)
 #: and cost at most 0.2 %; 3e3 cost up to 4.6 %, and (ratio 0.5) a sixth rung at 1e3 or a
 #: top pair (3e3, 3e4) up to 13 % and 1.8 % (docs/defaults.md)
 LADDER = (1e-4, 1e-2, 1.0, 1e2, 5e3)
-#: a plot is updated in the frame of its direction (linear in the position) when its
-#: range or the prediction's is below this many times the larger of the prediction's
-#: position std and the range std (the polar Jacobian's error over the prior grows as
-#: (std / range)^2: 4 % at 5)
-NEAR_SENSOR_SIGMAS = 5.0
 
 
 # ---------------------------------------------------------------------------
@@ -574,9 +571,24 @@ class LevelIMM(ConfiguredFilter, CartesianState):
         return polar_measurement(x, s, self.d, self.range_rate)
 
     def innovation(self, state: TrackState, plots: Plots) -> tuple[FloatArray, FloatArray]:
+        """Polar innovations; the plots next to the sensor in the frame of their direction,
+        as :meth:`update` takes them (:meth:`_near_sensor`)."""
         hx, H = self._measure(state.x, plots, 1)
-        y = wrap_angles(plots.polar(self.range_rate) - hx, self.angular)
-        return y, kalman.symmetrize(_hph(H, state.P) + self.R)
+        z = plots.polar(self.range_rate)
+        y = wrap_angles(z - hx, self.angular)
+        S = kalman.symmetrize(_hph(H, state.P) + self.R)
+        s = sensor_state(plots, self.d)
+        near = self._near_sensor(state, z, s, np.asarray(np.isfinite(z).all(-1)))
+        if near.any():
+            i = np.flatnonzero(near)
+            yn, Sn = np.empty((i.size, z.shape[1])), np.empty((i.size, z.shape[1], z.shape[1]))
+            frame_innovation_core(
+                np.ascontiguousarray(state.x[i]), np.ascontiguousarray(state.P[i]),
+                np.ascontiguousarray(z[i]), near[i], np.ascontiguousarray(s[i]), self.d,
+                self.range_rate, self.angular, self.r, yn, Sn,
+            )  # fmt: skip
+            y[i], S[i] = yn, Sn
+        return y, S
 
     def update(self, state: TrackState, plots: Plots) -> TrackState:
         a = state.aux
@@ -608,18 +620,8 @@ class LevelIMM(ConfiguredFilter, CartesianState):
     def _near_sensor(
         self, state: TrackState, z: FloatArray, s: FloatArray, ok: NDArray[np.bool_]
     ) -> NDArray[np.bool_]:
-        """The plots next to the sensor, updated in the frame of their direction
-        (:func:`seatrack.models.measurement.sensor_frame_core`): the plot's or the
-        prediction's range below :data:`NEAR_SENSOR_SIGMAS` times the larger of the
-        prediction's position std and the range std -- where the polar Jacobian no longer
-        holds over the prior's extent."""
-        d = self.d
-        rel = state.x[:, :d] - s[:, :d]
-        predicted_range = np.sqrt(np.einsum("bi,bi->b", rel, rel))
-        var = np.trace(state.P[:, :d, :d], axis1=1, axis2=2)
-        spread = np.maximum(np.sqrt(np.maximum(var, 0.0)), np.sqrt(self.r[0]))
-        with np.errstate(invalid="ignore"):
-            return ok & (np.minimum(z[:, 0], predicted_range) < NEAR_SENSOR_SIGMAS * spread)
+        """The plots updated in the frame of their direction (:func:`near_sensor`)."""
+        return ok & near_sensor(state.x, state.P, z[:, 0], s, self.d, float(self.r[0]))
 
     def _thresholds(self, eps: FloatArray) -> FloatArray:
         """The Huber thresholds or Student-t degrees of freedom ``(B, m)`` or ``(1, m)`` of

@@ -50,6 +50,7 @@ __all__ = [
     "level_predict_core",
     "level_update_core",
     "level_combine_core",
+    "frame_innovation_core",
 ]
 
 _LOG_2PI = math.log(2.0 * math.pi)
@@ -445,12 +446,13 @@ def _plot_frame(
             rb[a] = spread * (ce * ce * r[1] if a == 1 else r[2])
 
 
-@njit(cache=True)
-def _nis(
-    x, P, z, nearb, s, d, rr, angular, r, hx, H, y, HP, A, S, L, w, zb, rb, wrap
-):  # pragma: no cover
-    """``y^T S^-1 y`` of plot ``z`` against the combined prediction ``(x, P)``, in the
-    plot's frame (:func:`_plot_frame`; the other arguments: scratch)."""
+@njit(cache=True, inline="always")
+def _innovation_item(
+    x, P, z, nearb, s, d, rr, angular, r, hx, H, y, HP, A, S, zb, rb, wrap
+):  # pragma: no cover - compiled
+    """The innovation ``y`` of plot ``z`` against the prediction ``(x, P)`` and its
+    covariance ``S``, in the plot's frame (:func:`_plot_frame`; the other arguments:
+    scratch)."""
     m = z.shape[0]
     n = x.shape[0]
     _plot_frame(x.reshape((1, n)), s.reshape((1, s.shape[0])), d, rr, z, True, nearb, r,
@@ -465,6 +467,32 @@ def _nis(
     for a in range(m):
         for c in range(m):
             S[a, c] = 0.5 * (A[a, c] + A[c, a])
+
+
+@njit(cache=True)
+def frame_innovation_core(x, P, z, near, s, d, rr, angular, r, Y, S):  # pragma: no cover
+    """:func:`_innovation_item` over a batch: predictions ``x (B, n)``, ``P``, plots
+    ``z (B, m)``, flags ``near (B,)``, sensors ``s (B, 2d)``; writes ``Y (B, m)`` and
+    ``S (B, m, m)`` (the gating of :meth:`seatrack.filters.levels.LevelIMM.innovation`
+    in the frame its update uses)."""
+    B, n = x.shape
+    m = z.shape[1]
+    hx, H = np.empty((1, m)), np.empty((1, m, n))
+    HP, A = np.empty((m, n)), np.empty((m, m))
+    zb, rb, wrap = np.empty(m), np.empty(m), np.empty(m, np.bool_)
+    for b in range(B):
+        _innovation_item(x[b], P[b], z[b], near[b], s[b], d, rr, angular, r, hx, H, Y[b], HP, A,
+                         S[b], zb, rb, wrap)  # fmt: skip
+
+
+@njit(cache=True)
+def _nis(
+    x, P, z, nearb, s, d, rr, angular, r, hx, H, y, HP, A, S, L, w, zb, rb, wrap
+):  # pragma: no cover
+    """``y^T S^-1 y`` of plot ``z`` against the combined prediction ``(x, P)``, in the
+    plot's frame (:func:`_innovation_item`; the other arguments: scratch)."""
+    m = z.shape[0]
+    _innovation_item(x, P, z, nearb, s, d, rr, angular, r, hx, H, y, HP, A, S, zb, rb, wrap)
     logdet = cholesky_core(S, L)
     if not logdet == logdet:  # NaN: not positive definite
         return np.nan

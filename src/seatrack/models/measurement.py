@@ -50,6 +50,8 @@ __all__ = [
     "polar_measurement",
     "polar_core",
     "sensor_frame_core",
+    "near_sensor",
+    "NEAR_SENSOR_SIGMAS",
 ]
 
 
@@ -393,6 +395,30 @@ def sensor_frame_core(x, s, d, az, el, hx, H):  # pragma: no cover - compiled
             H[b, 0, 2] = se
             H[b, 2, 0], H[b, 2, 1], H[b, 2, 2] = -se * sa, -se * ca, ce
             hx[b, 2] = -se * sa * dx - se * ca * dy + ce * dz
+
+
+#: a plot is taken in the frame of its direction (:func:`sensor_frame_core`) when its range
+#: or the prediction's is below this many times the larger of the prediction's position
+#: std and the range std (the polar Jacobian's error over the prior grows as
+#: (std / range)^2: 4 % at 5)
+NEAR_SENSOR_SIGMAS = 5.0
+
+
+def near_sensor(
+    x: ArrayLike, P: ArrayLike, plot_range: ArrayLike, sensor: ArrayLike, d: int, var_range: float
+) -> NDArray[np.bool_]:
+    """Which plots are next to the sensor: the plot's range or the predicted one (states
+    ``x (B, n)``, ``P``, positions first; sensors ``(B, >= d)``; m) below
+    :data:`NEAR_SENSOR_SIGMAS` times the larger of the predicted position std
+    ``sqrt(tr P_pos)`` and the range std ``sqrt(var_range)`` -- where the polar Jacobian no
+    longer holds over the prior's extent. Non-finite inputs give False."""
+    xx, PP = np.asarray(x, dtype=float), np.asarray(P, dtype=float)
+    rel = xx[:, :d] - np.asarray(sensor, dtype=float)[:, :d]
+    predicted = np.sqrt(np.einsum("bi,bi->b", rel, rel))
+    spread = np.sqrt(np.maximum(np.trace(PP[:, :d, :d], axis1=1, axis2=2), 0.0))
+    limit = NEAR_SENSOR_SIGMAS * np.maximum(spread, math.sqrt(var_range))
+    with np.errstate(invalid="ignore"):
+        return np.asarray(np.minimum(np.asarray(plot_range, dtype=float), predicted) < limit)
 
 
 def polar_measurement(

@@ -411,14 +411,29 @@ def near_sensor(
     ``x (B, n)``, ``P``, positions first; sensors ``(B, >= d)``; m) below
     :data:`NEAR_SENSOR_SIGMAS` times the larger of the predicted position std
     ``sqrt(tr P_pos)`` and the range std ``sqrt(var_range)`` -- where the polar Jacobian no
-    longer holds over the prior's extent. Non-finite inputs give False."""
-    xx, PP = np.asarray(x, dtype=float), np.asarray(P, dtype=float)
-    rel = xx[:, :d] - np.asarray(sensor, dtype=float)[:, :d]
-    predicted = np.sqrt(np.einsum("bi,bi->b", rel, rel))
-    spread = np.sqrt(np.maximum(np.trace(PP[:, :d, :d], axis1=1, axis2=2), 0.0))
-    limit = NEAR_SENSOR_SIGMAS * np.maximum(spread, math.sqrt(var_range))
-    with np.errstate(invalid="ignore"):
-        return np.asarray(np.minimum(np.asarray(plot_range, dtype=float), predicted) < limit)
+    longer holds over the prior's extent. Non-finite inputs give False (compiled: it runs
+    on every update and gating of the level methods)."""
+    xx = np.ascontiguousarray(x, dtype=float)
+    out = np.empty(xx.shape[0], dtype=np.bool_)
+    _near_sensor_core(
+        xx, np.ascontiguousarray(P, dtype=float), np.ascontiguousarray(plot_range, dtype=float),
+        np.ascontiguousarray(sensor, dtype=float), d, float(var_range), NEAR_SENSOR_SIGMAS, out,
+    )  # fmt: skip
+    return out
+
+
+@njit(cache=True)
+def _near_sensor_core(x, P, rng, s, d, var_range, k, out):  # pragma: no cover - compiled
+    for b in range(x.shape[0]):
+        r2 = 0.0
+        tr = 0.0
+        for i in range(d):
+            v = x[b, i] - s[b, i]
+            r2 += v * v
+            tr += P[b, i, i]
+        limit = k * math.sqrt(max(tr, var_range))
+        finite = math.isfinite(r2) and math.isfinite(tr) and math.isfinite(rng[b])
+        out[b] = finite and min(rng[b], math.sqrt(r2)) < limit
 
 
 def polar_measurement(

@@ -423,12 +423,12 @@ def _plot_frame(
     """The predicted plots ``hx (M, m)`` and Jacobians ``H`` of the states ``Xb (M, n)``
     (sensor rows ``sr``), the plot ``zb`` in the same frame, its variances ``rb`` and the
     channels to wrap: polar (:func:`seatrack.models.measurement.polar_core`), or -- for a
-    plot next to the sensor (``nearb``) -- range and azimuth replaced by the linear position
-    in the frame of the measured azimuth
-    (:func:`seatrack.models.measurement.sensor_frame_core`): the plot is
+    plot next to the sensor (``nearb``; :func:`seatrack.models.measurement.near_sensor`) --
+    range, azimuth [and elevation] replaced by the linear position in the frame of the
+    plot's direction (:func:`seatrack.models.measurement.sensor_frame_core`): the plot is
     ``[range, 0, (0)]``, the across variances ``(range^2 + sigma_r^2) cos^2(el) sigma_az^2``
-    and ``(range^2 + sigma_r^2) sigma_el^2``. An unusable plot
-    (``okb`` false) is replaced by the first state's prediction."""
+    and ``(range^2 + sigma_r^2) sigma_el^2``. An unusable plot (``okb`` false) is replaced
+    by the first state's prediction."""
     polar_core(Xb, sr, d, rr, hx, H)
     for a in range(zb.shape[0]):
         rb[a] = r[a]

@@ -30,6 +30,7 @@ from seatrack.filters.levels import contaminated_loglik
 from seatrack.filters.levels import level_noise
 from seatrack.filters.levels import mixture_update
 from seatrack.filters.levels import outlier_patterns
+from seatrack.models.measurement import near_sensor
 from seatrack.models.motion import cv_transition
 from seatrack.models.targets import AIRCRAFT
 from seatrack.models.targets import SHIP
@@ -449,8 +450,7 @@ def test_gating_takes_near_plots_in_the_frame_the_update_uses(d):
         first, nxt = p.take([0, 100, 200]), p.take([1, 101, 201])
         x0, P0 = plot_gaussian(first, SENSOR, 20.0, False)
         pred = flt.predict(flt.initiate(first.t, x0, P0), nxt.t)
-        near = flt._near_sensor(pred, nxt.polar(False), np.c_[nxt.sensor, nxt.sensor_vel],
-                                np.ones(3, bool))  # fmt: skip
+        near = near_sensor(pred.x, pred.P, nxt.range, nxt.sensor, d, float(flt.r[0]))
         assert near.all() if p is plots else not near.any()
         y, S = flt.innovation(pred, nxt)
         nis = np.einsum("bi,bi->b", y, np.linalg.solve(S, y[..., None])[..., 0])

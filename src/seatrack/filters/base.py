@@ -707,19 +707,18 @@ def finish_update(
     good = np.isfinite(log_likelihood) & np.isfinite(x).all(-1) & np.isfinite(P).all((-1, -2))
     if ok is not None:
         good &= ok
-    everyone = bool(good.all())  # every plot updated its track: the usual scan
-    nan = np.full(good.shape, np.nan)
-    if everyone:
+    if good.all():  # every plot updated its track: the usual scan
         status = np.full(good.shape, PlotStatus.UPDATED, np.int8)
         nis_o, ll_o = np.asarray(nis, dtype=float), np.asarray(log_likelihood, dtype=float)
-    else:
-        status = np.where(good, PlotStatus.UPDATED, PlotStatus.REJECTED).astype(np.int8)
-        nis_o, ll_o = np.where(good, nis, nan), np.where(good, log_likelihood, nan)
+        return TrackState(
+            np.asarray(t, dtype=float), x, P, nis_o, ll_o, status, {**prior.aux, **(aux or {})}
+        )
+    status = np.where(good, PlotStatus.UPDATED, PlotStatus.REJECTED).astype(np.int8)
+    nan = np.full(good.shape, np.nan)
     new = TrackState(
-        np.asarray(t, dtype=float), x, P, nis_o, ll_o, status, {**prior.aux, **(aux or {})}
-    )
-    if everyone:
-        return new
+        np.asarray(t, dtype=float), x, P, np.where(good, nis, nan),
+        np.where(good, log_likelihood, nan), status, {**prior.aux, **(aux or {})},
+    )  # fmt: skip
     kept = prior.replace(nis=nan, log_likelihood=nan.copy(), status=status, t=new.t)
     return kept.where(good, new)
 

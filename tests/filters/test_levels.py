@@ -40,6 +40,7 @@ from seatrack.simulate import observe
 from seatrack.simulate import trajectory
 from seatrack.simulate.families import labelled_runs
 from seatrack.simulate.families import weaving
+from seatrack.tracking.tracks import concat_plots
 
 SENSOR = SensorNoise(10.0, math.radians(0.3))
 
@@ -404,15 +405,10 @@ def _start_on_the_sensor(runs: int, d: int = 2) -> tuple[Plots, list]:
         m = observe(tr, None, channels, NoiseModel(sig), rng)
         el = m.z[:, 2] if d == 3 else None
         parts.append(Plots(tr.t, m.z[:, 0], m.z[:, 1], el, sensor=m.sensor_pos,
-                           sensor_vel=m.sensor_vel, track=np.full(len(tr.t), f"r{k}")))  # fmt: skip
+                           sensor_vel=m.sensor_vel))  # fmt: skip
         truths.append(tr.pos[:, :2])
-    fields = ("t", "range", "azimuth", "elevation", "sensor", "sensor_vel", "track")
-
-    def cat(f):
-        first = getattr(parts[0], f)
-        return None if first is None else np.concatenate([getattr(p, f) for p in parts])
-
-    return Plots(**{f: cat(f) for f in fields}), truths
+    labels = np.concatenate([np.full(len(p), f"r{k}") for k, p in enumerate(parts)])
+    return dataclasses.replace(concat_plots(parts), track=labels), truths
 
 
 @pytest.mark.parametrize(

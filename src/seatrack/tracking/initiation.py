@@ -17,8 +17,7 @@ by default ``max_speed / sqrt(6)``: speeds uniform up to ``max_speed``). Free pl
 up to ``init_scans - 1`` scans for a partner, so a missed detection right after a
 target's first plot does not delay its track.
 
-The new track (:meth:`MultiTargetTracker._start
-<seatrack.tracking.tracker.MultiTargetTracker>`) is the first plot with that velocity
+The new track (:class:`~seatrack.tracking.initiators.TwoPointInitiator`) is the first plot with that velocity
 prior (:func:`seatrack.filters.base.plot_gaussian`), predicted to the second plot's time
 and updated with it by the per-track filter: the exact Bayesian fusion of the prior and
 the two plots. Taking the velocity from the difference of the two plots alone

@@ -55,6 +55,7 @@ from seatrack.tracking.clutter import DetectionRate
 from seatrack.tracking.clutter import SurveillanceRegion
 from seatrack.tracking.components import GNN
 from seatrack.tracking.components import JPDA
+from seatrack.tracking.components import UPDATED
 from seatrack.tracking.components import Association
 from seatrack.tracking.components import Associator
 from seatrack.tracking.components import ExistenceManager
@@ -97,6 +98,7 @@ __all__ = [
     "TrackerRun",
     "run_tracker",
     "usable_plots",
+    "UPDATED",
 ]
 
 _TENTATIVE = int(TrackStatus.TENTATIVE)

@@ -81,7 +81,6 @@ from seatrack.simulate.multitarget import simulate_multitarget
 from seatrack.simulate.scenarios import SensorConfig
 from seatrack.tracking import MultiTargetTracker
 from seatrack.tracking import TrackerConfig
-from seatrack.tracking.auto import AUTO_NOISE
 from seatrack.tracking.auto import noise_levels
 from seatrack.tracking.auto import per_track_filter
 from seatrack.tracking.auto import scan_period
@@ -426,13 +425,13 @@ def tune_turns(runs: list[MultiTargetRun]) -> None:
 
 def tune_methods(runs: list[MultiTargetRun]) -> None:
     """Every registered method as the per-track filter on the tuning runs, given only the
-    sensor noise, with each automatic process-noise rule: the evidence for
-    ``seatrack.tracking.auto.AUTO_NOISE`` (methods needing range rate are skipped: the
-    scenarios have none)."""
+    sensor noise, with each automatic process-noise rule: the evidence for the rule of each
+    method in the registry (``MethodRecord.noise``; methods needing range rate are skipped:
+    the scenarios have none)."""
     from seatrack.filters.registry import METHODS
     from seatrack.filters.registry import method_class
 
-    print("\nper-track filters on the tuning scenarios (mean GOSPA; * = AUTO_NOISE)")
+    print("\nper-track filters on the tuning scenarios (mean GOSPA; * = the registry's rule)")
     for name in METHODS:
         if getattr(method_class(name), "needs_range_rate", False):
             continue
@@ -441,7 +440,7 @@ def tune_methods(runs: list[MultiTargetRun]) -> None:
         for rule in rules:
             g = np.mean([score(r, run_seatrack(r, TrackerConfig(), method=name, rule=rule))
                          .mean_gospa for r in runs])  # fmt: skip
-            cells.append(f"{rule}{'*' if AUTO_NOISE[name] == rule else ''} {g:.1f}")
+            cells.append(f"{rule}{'*' if METHODS[name].noise == rule else ''} {g:.1f}")
         print(f"  {name:16s} " + "   ".join(cells), flush=True)
 
 

@@ -20,7 +20,7 @@ and Stone Soup's settings: ``--tune`` re-runs both searches and prints them.
 Trackers:
 
 * ``seatrack gnn`` / ``seatrack jpda`` (the headline rows) --
-  :class:`seatrack.tracking.MultiTargetTracker` with the reference EKF given ONLY the
+  the default :class:`seatrack.tracking.Tracker` with the reference EKF given ONLY the
   sensor's nominal noise: process noise (two-level IMM from the ship class), clutter
   density, detection probability, deletion and gates chosen automatically;
 * ``seatrack gnn, one q`` -- the same with a single process noise ``SINGLE_Q``, the best
@@ -79,7 +79,7 @@ from seatrack.simulate.multitarget import MultiTargetRun
 from seatrack.simulate.multitarget import TargetPopulation
 from seatrack.simulate.multitarget import simulate_multitarget
 from seatrack.simulate.scenarios import SensorConfig
-from seatrack.tracking import MultiTargetTracker
+from seatrack.tracking import Tracker
 from seatrack.tracking import TrackerConfig
 from seatrack.tracking.auto import noise_levels
 from seatrack.tracking.auto import per_track_filter
@@ -174,7 +174,7 @@ def run_seatrack(
     if q is not None:
         tab["q"] = q
     m, _ = per_track_filter(method, tab, 2, False, scan_period(run.plots.t), rule=rule)
-    trk = MultiTargetTracker(m.filter, SENSOR, config)
+    trk = Tracker(m.filter, sensor=SENSOR, config=config)
     out = trk.run(m.prepare(run.plots))
     pos = np.stack([out.columns["x_m"], out.columns["y_m"]], -1) if out.t.size else np.zeros((0, 2))
     return Result(out.t, out.track, pos, out.seconds_per_scan, out.cpu_seconds_per_scan)

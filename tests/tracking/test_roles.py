@@ -115,6 +115,17 @@ def test_a_scan_without_plots_coasts_the_tracks():
     assert np.all(res.plot == -1) and np.all(np.isfinite(cols["x_m"]))
 
 
+def test_the_sensor_noise_defaults_to_the_filter_s():
+    """Without ``sensor``, the tracker takes the filter's own nominal noise, also through
+    the automatic noise-level wrapper."""
+    table = {"sigma_range_m": 25.0, "sigma_azimuth_deg": 0.4}
+    m, rule = per_track_filter("ekf", table, 2, False, 2.5)
+    own = Tracker(m.filter).sensor
+    assert rule == "levels" and own is m.filter.flt.sensor  # type: ignore[attr-defined]
+    assert own.sigma_range == 25.0 and own.sigma_azimuth == pytest.approx(np.radians(0.4))
+    assert Tracker(m.filter, sensor=SN).sensor == SN
+
+
 def test_the_roles_honour_their_protocols():
     assert isinstance(GNN(), Associator) and isinstance(JPDA(), Associator)
     assert isinstance(TwoPointInitiator(), Initiator)

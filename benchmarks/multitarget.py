@@ -20,7 +20,7 @@ and Stone Soup's settings: ``--tune`` re-runs both searches and prints them.
 Trackers:
 
 * ``seatrack gnn`` / ``seatrack jpda`` (the headline rows) --
-  :class:`seatrack.tracking.MultiTargetTracker` with the reference EKF given ONLY the
+  the default :class:`seatrack.tracking.Tracker` with the reference EKF given ONLY the
   sensor's nominal noise: process noise (two-level IMM from the ship class), clutter
   density, detection probability, deletion and gates chosen automatically;
 * ``seatrack gnn, one q`` -- the same with a single process noise ``SINGLE_Q``, the best
@@ -79,9 +79,8 @@ from seatrack.simulate.multitarget import MultiTargetRun
 from seatrack.simulate.multitarget import TargetPopulation
 from seatrack.simulate.multitarget import simulate_multitarget
 from seatrack.simulate.scenarios import SensorConfig
-from seatrack.tracking import MultiTargetTracker
+from seatrack.tracking import Tracker
 from seatrack.tracking import TrackerConfig
-from seatrack.tracking.auto import AUTO_NOISE
 from seatrack.tracking.auto import noise_levels
 from seatrack.tracking.auto import per_track_filter
 from seatrack.tracking.auto import scan_period
@@ -175,7 +174,7 @@ def run_seatrack(
     if q is not None:
         tab["q"] = q
     m, _ = per_track_filter(method, tab, 2, False, scan_period(run.plots.t), rule=rule)
-    trk = MultiTargetTracker(m.filter, SENSOR, config)
+    trk = Tracker(m.filter, sensor=SENSOR, config=config)
     out = trk.run(m.prepare(run.plots))
     pos = np.stack([out.columns["x_m"], out.columns["y_m"]], -1) if out.t.size else np.zeros((0, 2))
     return Result(out.t, out.track, pos, out.seconds_per_scan, out.cpu_seconds_per_scan)
@@ -426,13 +425,13 @@ def tune_turns(runs: list[MultiTargetRun]) -> None:
 
 def tune_methods(runs: list[MultiTargetRun]) -> None:
     """Every registered method as the per-track filter on the tuning runs, given only the
-    sensor noise, with each automatic process-noise rule: the evidence for
-    ``seatrack.tracking.auto.AUTO_NOISE`` (methods needing range rate are skipped: the
-    scenarios have none)."""
+    sensor noise, with each automatic process-noise rule: the evidence for the rule of each
+    method in the registry (``MethodRecord.noise``; methods needing range rate are skipped:
+    the scenarios have none)."""
     from seatrack.filters.registry import METHODS
     from seatrack.filters.registry import method_class
 
-    print("\nper-track filters on the tuning scenarios (mean GOSPA; * = AUTO_NOISE)")
+    print("\nper-track filters on the tuning scenarios (mean GOSPA; * = the registry's rule)")
     for name in METHODS:
         if getattr(method_class(name), "needs_range_rate", False):
             continue
@@ -441,7 +440,7 @@ def tune_methods(runs: list[MultiTargetRun]) -> None:
         for rule in rules:
             g = np.mean([score(r, run_seatrack(r, TrackerConfig(), method=name, rule=rule))
                          .mean_gospa for r in runs])  # fmt: skip
-            cells.append(f"{rule}{'*' if AUTO_NOISE[name] == rule else ''} {g:.1f}")
+            cells.append(f"{rule}{'*' if METHODS[name].noise == rule else ''} {g:.1f}")
         print(f"  {name:16s} " + "   ".join(cells), flush=True)
 
 

@@ -21,15 +21,16 @@ DOC = Path(__file__).resolve().parents[1] / "docs" / "architecture.md"
 
 @pytest.fixture
 def alpha_beta(monkeypatch):
+    """The page's method module (its first code block, as module ``my_filters``) and its
+    record (the second block: ``register``), taken out of the registry afterwards."""
     text = DOC.read_text(encoding="utf-8")
     section = text[text.index("## How to add a method") :]
-    code = re.search(r"```python\n(.*?)```", section, re.S).group(1)  # type: ignore[union-attr]
-    mod = types.ModuleType("docs_alpha_beta")
-    monkeypatch.setitem(sys.modules, "docs_alpha_beta", mod)  # dataclasses look it up
-    exec(compile(code, str(DOC), "exec"), mod.__dict__)
-    monkeypatch.setitem(
-        registry.METHODS, "alpha-beta", ("docs_alpha_beta", "AlphaBeta", "alpha-beta tracker")
-    )
+    method, record = re.findall(r"```python\n(.*?)```", section, re.S)[:2]
+    mod = types.ModuleType("my_filters")
+    monkeypatch.setitem(sys.modules, "my_filters", mod)  # dataclasses look it up
+    exec(compile(method, str(DOC), "exec"), mod.__dict__)
+    monkeypatch.setattr(registry, "METHODS", dict(registry.METHODS))  # restored afterwards
+    exec(compile(record, str(DOC), "exec"), {})
     return mod
 
 
@@ -40,6 +41,15 @@ def _plots(n: int = 80) -> tuple[Plots, np.ndarray]:
     r = np.hypot(pos[:, 0], pos[:, 1]) + rng.normal(0, 10.0, n)
     az = np.arctan2(pos[:, 0], pos[:, 1]) + rng.normal(0, 0.003, n)
     return Plots(t, r, az % (2 * np.pi), track=np.full(n, "A")), pos
+
+
+def test_the_documented_record_lists_the_method(alpha_beta):
+    rec = registry.METHODS["alpha-beta"]
+    assert rec.load() is alpha_beta.AlphaBeta and rec.group == "baseline"
+    assert "alpha-beta" in registry.list_methods().split("sources as written")[0]
+    assert "`alpha-beta` | baseline | `my_filters.AlphaBeta`" in registry.methods_table()
+    with pytest.raises(ValueError, match="registered already"):
+        registry.register(rec)
 
 
 def test_the_documented_method_runs_through_the_registry(alpha_beta):

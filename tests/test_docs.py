@@ -17,29 +17,11 @@ from seatrack.filters.base import SensorNoise
 from seatrack.filters.registry import METHODS
 from seatrack.filters.registry import TARGET_KEY
 from seatrack.filters.registry import describe_method
+from seatrack.filters.registry import methods_table
 from seatrack.models.targets import TARGET_CLASSES
 
 ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
-
-#: the page that documents each method's configuration keys
-KEYS_PAGE = {
-    "ekf": "defaults.md",
-    "imm": "multimodel.md",
-    "turning": "turning.md",
-    "turning-spec": "turning.md",
-    "robust": "robust.md",
-    "robust-spec": "robust.md",
-    "robust-adaptive": "robust.md",
-    "robust-adaptive-spec": "robust.md",
-    "huber": "robust.md",
-    "student-t": "robust.md",
-    "ekf-rb": "robust.md",
-    "mm": "multimodel.md",
-    "mm-spec": "multimodel.md",
-    "mm-rangerate": "multimodel.md",
-    "mm-rangerate-spec": "multimodel.md",
-}
 
 
 def _read(name: str) -> str:
@@ -65,14 +47,16 @@ def _table(text: str, heading: str) -> list[list[str]]:
     return rows
 
 
-def test_architecture_lists_exactly_the_registered_methods():
-    rows = _table(_read("architecture.md"), "Registered methods (`filters.registry.METHODS`")
-    assert rows[0][0] == "name"
-    listed = [r[0].strip("`") for r in rows[1:]]
-    assert listed == list(METHODS)
-    for row in rows[1:]:  # the class column names the registered class
-        module, cls, _ = METHODS[row[0].strip("`")]
-        assert row[1] == f"`{module.removeprefix('seatrack.')}.{cls}`"
+@pytest.mark.parametrize("page", ["docs/architecture.md", "README.md"])
+def test_the_methods_table_is_the_registry_s(page):
+    """The methods tables are generated from the records: the page holds the table
+    regenerated now, and it lists every method with its class."""
+    table = methods_table()
+    assert table in (ROOT / page).read_text(encoding="utf-8"), f"{page}: regenerate the table"
+    rows = [[c.strip() for c in line.strip("|").split("|")] for line in table.splitlines()[2:]]
+    assert [r[0].strip("`") for r in rows] == list(METHODS)
+    for row in rows:
+        assert row[2] == f"`{METHODS[row[0].strip('`')].path.removeprefix('seatrack.')}`"
 
 
 @pytest.mark.parametrize("page", ["defaults.md", "../README.md"])
@@ -92,10 +76,10 @@ def test_every_spec_method_is_on_its_source_page():
 
 @pytest.mark.parametrize("method", list(METHODS))
 def test_every_configuration_key_is_documented(method):
-    assert set(KEYS_PAGE) == set(METHODS)
-    names = _ticked(_read(KEYS_PAGE[method]))
+    page = METHODS[method].docs
+    names = _ticked(_read(page))
     missing = [key for key, *_ in describe_method(method) if key not in names]
-    assert not missing, f"{KEYS_PAGE[method]} lacks keys of {method}: {missing}"
+    assert not missing, f"{page} lacks keys of {method}: {missing}"
 
 
 @pytest.mark.parametrize("page", ["defaults.md", "formats.md", "../README.md"])

@@ -170,3 +170,21 @@ def test_track_label_with_a_comma_is_quoted(tmp_path):
     assert r.returncode == 0, r.stderr
     rows = list(csv.DictReader(open(tmp_path / "o.csv")))
     assert [row["track"] for row in rows] == ["a,b", "a,b"]
+
+
+def test_list_methods_comes_from_the_registry(tmp_path):
+    """``--list-methods`` prints the registry's listing (the reproductions of the sources
+    apart, after the methods to pick) and needs no input file; ``--help`` names the
+    methods of the registry."""
+    from seatrack.filters.registry import METHODS
+    from seatrack.filters.registry import list_methods
+
+    r = _seatrack("track", "--list-methods", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.strip() == list_methods().strip()
+    picked, sources = r.stdout.split("sources as written")
+    assert all(f"  {n} " in sources for n in METHODS if n.endswith("-spec"))
+    assert not any(f"  {n} " in picked for n in METHODS if n.endswith("-spec"))
+    help_text = " ".join(_seatrack("track", "--help", cwd=tmp_path).stdout.split())
+    assert "--list-methods" in help_text and "huber" in help_text
+    assert "sources as written" in help_text

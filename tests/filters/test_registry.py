@@ -64,9 +64,11 @@ def _turn_plots(rate_dps=3.0, dt=2.0, seed=5, range_rate=False):
 
 def test_every_spec_method_has_its_own_name_and_a_default():
     for name, cls in SPEC.items():
-        assert registry.METHODS[f"{name}-spec"][1] == cls
-        assert registry.METHODS[name][1] != cls  # the default is the departure
+        assert registry.METHODS[f"{name}-spec"].class_name == cls
+        assert registry.METHODS[f"{name}-spec"].group == "reference"
+        assert registry.METHODS[name].class_name != cls  # the default is the departure
     assert {n for n in registry.METHODS if n.endswith("-spec")} == {f"{n}-spec" for n in SPEC}
+    assert set(registry.names("reference")) == {f"{n}-spec" for n in SPEC}
 
 
 @pytest.mark.parametrize("name", list(registry.METHODS))
@@ -223,3 +225,16 @@ def test_a_target_preset_is_a_config_of_the_method():
         cls = registry.method_class(name)
         pre = cls.Config.for_target(SHIP)
         assert dataclasses.is_dataclass(pre) and isinstance(pre, cls.Config), name
+
+
+def test_a_record_checks_its_group_and_noise_rule():
+    rec = registry.METHODS["ekf"]
+    assert rec.config is rec.load().Config and rec.path == "seatrack.filters.ekf.EKF"
+    with pytest.raises(ValueError, match="group"):
+        registry.MethodRecord("x", "m", "C", "d", "w", group="favourite")
+    with pytest.raises(ValueError, match="noise"):
+        registry.MethodRecord("x", "m", "C", "d", "w", noise="auto")
+    with pytest.raises(ValueError, match="unknown method 'nope'"):
+        registry.record("nope")
+    groups = [registry.names(g) for g in registry.GROUPS]
+    assert sorted(sum(groups, [])) == sorted(registry.METHODS) and all(groups)

@@ -19,7 +19,6 @@ from seatrack.io.table import InputError
 from seatrack.tracking import MultiTargetTracker
 from seatrack.tracking import TrackerConfig
 from seatrack.tracking.adaptive import NoiseLevels
-from seatrack.tracking.auto import AUTO_NOISE
 
 
 def _write(path, rows, header="time_s,range_m,azimuth_deg"):
@@ -82,7 +81,7 @@ def test_make_filter_builds_every_registered_method_and_rejects_unknown_ones():
               range_rate=np.zeros(2))  # fmt: skip
     for name in METHODS:
         m, rule = make_filter(name, {}, p)
-        assert rule == AUTO_NOISE[name] and m.name == name
+        assert rule == METHODS[name].noise and m.name == name
         assert isinstance(m.filter, NoiseLevels) == (rule != "own")
     m, rule = make_filter("ekf", {"q": 0.5}, p)
     assert rule == "given" and not isinstance(m.filter, NoiseLevels)

@@ -9,7 +9,6 @@ from seatrack.filters.cvct_imm import CVCTIMM
 from seatrack.filters.ekf import EKF
 from seatrack.filters.registry import METHODS
 from seatrack.tracking.adaptive import NoiseLevels
-from seatrack.tracking.auto import AUTO_NOISE
 from seatrack.tracking.auto import noise_levels
 from seatrack.tracking.auto import per_track_filter
 from seatrack.tracking.auto import scan_period
@@ -30,8 +29,8 @@ def test_noise_levels_scale_with_the_period():
 
 
 def test_every_registered_method_has_a_noise_rule():
-    assert set(AUTO_NOISE) == set(METHODS)
-    assert set(AUTO_NOISE.values()) <= {"levels", "wrap", "own"}
+    assert {r.noise for r in METHODS.values()} == {"levels", "wrap", "own"}
+    assert [n for n, r in METHODS.items() if r.noise == "levels"] == ["ekf"]
 
 
 def test_ekf_gets_the_noise_levels_only_when_q_is_not_given():
@@ -50,7 +49,7 @@ def test_methods_with_their_own_manoeuvre_handling_keep_their_defaults():
     m, rule = per_track_filter("imm", {}, 2, False, 2.5)
     assert rule == "own" and isinstance(m.filter, CVCTIMM)
     m, rule = per_track_filter("huber", {}, 3, False, 2.5)
-    assert rule == AUTO_NOISE["huber"] and m.horizontal  # 2-D method on 3-D plots
+    assert rule == METHODS["huber"].noise and m.horizontal  # 2-D method on 3-D plots
     m, rule = per_track_filter("imm", {"q_ct": 1.0}, 2, False, 2.5, rule="wrap")
     assert rule == "given" and isinstance(m.filter, CVCTIMM)
 

@@ -179,10 +179,10 @@ def test_existence_confirms_by_the_clutter_density():
     out = trk.run(dense.plots)
     s = _score(dense, out)
     share = n0 / np.count_nonzero(dense.plots.t == 0.0)
-    assert trk.undetected.first_plots > 250
+    assert trk.initiator.undetected.first_plots > 250
     assert np.median(out.existence[out.t == 2.5]) < np.median(sure)
     assert s.scans.n_false[2:].sum() == 0 and s.scans.n_missed[2:].sum() == 0
-    assert 0.5 * share < trk.undetected.first_share < 2 * share
+    assert 0.5 * share < trk.initiator.undetected.first_share < 2 * share
 
 
 def test_existence_drops_dead_tracks_quickly_and_keeps_live_ones():
@@ -235,13 +235,13 @@ def test_bad_plots_are_skipped_and_tracks_coast():
 def test_step_errors():
     trk = MultiTargetTracker(EKF(), SN)
     p = Plots(np.array([5.0, 6.0]), np.array([1000.0, 1000.0]), np.array([0.1, 0.2]))
-    with pytest.raises(ValueError, match="same time"):
-        trk.step(p)
-    with pytest.raises(ValueError, match="at least one plot"):
-        trk.step(p.take(np.zeros(0, int)))
-    trk.step(p.take([1]))
+    with pytest.raises(ValueError, match="scan time 5 s"):
+        trk.step(5.0, p)
+    with pytest.raises(ValueError, match="finite"):
+        trk.step(np.nan, p.take(np.zeros(0, int)))
+    trk.step(6.0, p.take([1]))
     with pytest.raises(ValueError, match="not after"):
-        trk.step(p.take([0]))
+        trk.step(5.0, p.take([0]))
 
 
 def test_config_validation_and_edge_units():
@@ -265,8 +265,8 @@ def test_new_tracks_take_the_velocity_prior_of_the_config():
     for kn in (6.0, 24.0):
         cfg = TrackerConfig(initial_speed_sigma=kn * 1852 / 3600)
         trk = MultiTargetTracker(ekf, SN, cfg)
-        trk.step(p.take([0]))
-        res = trk.step(p.take([1]))
+        trk.step(0.0, p.take([0]))
+        res = trk.step(2.5, p.take([1]))
         x, P = plot_gaussian(p.take([0]), SN, cfg.initial_speed_sigma)
         want = ekf.update(ekf.predict(ekf.initiate(p.t[:1], x, P), p.t[1:]), p.take([1]))
         assert res.track.size == 1

@@ -72,10 +72,17 @@ def write_track_csv(
     return int(table.num_rows)
 
 
-def register(app: typer.Typer) -> None:
-    from seatrack.filters.registry import METHODS
+def _list_methods(value: bool) -> None:
+    """``--list-methods``: every registered method, grouped, then exit."""
+    if value:
+        from seatrack.filters.registry import list_methods
 
-    names = ", ".join(f"{k} ({v[2]})" for k, v in METHODS.items())
+        typer.echo(list_methods())
+        raise typer.Exit()
+
+
+def register(app: typer.Typer) -> None:
+    from seatrack.filters.registry import method_help
 
     @app.command("track")
     def track(
@@ -84,7 +91,7 @@ def register(app: typer.Typer) -> None:
             help="PLOTS.csv: track, time_s, range_m, azimuth_deg, "
             "[elevation_deg], [range_rate_mps], [sensor_x_m, sensor_y_m, sensor_z_m]",
         ),
-        method: str = typer.Option("ekf", "--method", "-m", help=f"filter: {names}"),
+        method: str = typer.Option("ekf", "--method", "-m", help=method_help()),
         config: Path | None = typer.Option(
             None,
             "--config",
@@ -103,6 +110,13 @@ def register(app: typer.Typer) -> None:
         association: str | None = typer.Option(
             None, "--association", help="unlabelled plots: gnn or jpda"
         ),
+        list_methods: bool = typer.Option(
+            False,
+            "--list-methods",
+            callback=_list_methods,
+            is_eager=True,
+            help="list the methods (grouped, with when to use each) and exit",
+        ),  # fmt: skip
     ) -> None:
         """Run a tracking filter over recorded radar/sonar plots (without a track column:
         the multi-target tracker, see docs/tracking.md)."""

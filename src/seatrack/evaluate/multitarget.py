@@ -359,14 +359,14 @@ def track_scenario_run(
     from seatrack.io.multitarget import make_filter
     from seatrack.io.multitarget import sensor_noise
     from seatrack.io.multitarget import split_config
-    from seatrack.tracking import MultiTargetTracker
+    from seatrack.tracking import Tracker
     from seatrack.tracking import TrackerConfig
 
     t_tab, m_tab = split_config(table, "scenario")
     sensor = sensor_noise(m_tab, "scenario")
     tcfg = parse_config(TrackerConfig, {**t_tab, "association": association}, source="scenario")
     flt, _ = make_filter(method, m_tab, sim.plots, "scenario", tcfg)
-    tracker = MultiTargetTracker(flt.filter, sensor, tcfg)
+    tracker = Tracker(flt.filter, sensor=sensor, config=tcfg)
     out = tracker.run(flt.prepare(sim.plots))
     d = 2
     pos = np.stack([out.columns["x_m"], out.columns["y_m"]], -1) if out.t.size else np.zeros((0, d))

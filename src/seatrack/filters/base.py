@@ -721,8 +721,3 @@ def finish_update(
     )  # fmt: skip
     kept = prior.replace(nis=nan, log_likelihood=nan.copy(), status=status, t=new.t)
     return kept.where(good, new)
-
-
-def check_finite_state(state: TrackState) -> bool:
-    """True when every array of the state is finite (a test helper for the contract)."""
-    return all(np.isfinite(a).all() for a in state.iter_arrays() if a.dtype.kind == "f")

@@ -1,4 +1,11 @@
-"""Registry of the filters ``seatrack track --method NAME`` can run.
+"""Registry of the filters ``seatrack track --method NAME`` can run: one
+:class:`MethodRecord` per method (its class, one-line description, when to use it, the
+automatic process-noise rule of the multi-target tracker, the docs page of its keys and its
+group: ``default``, ``baseline`` or ``reference`` -- a source reproduced as written). The
+``--method`` help, ``seatrack track --list-methods``, the demo's advice, the rows of
+``seatrack evaluate`` and the methods tables of the docs are all generated from
+:data:`METHODS`: the records of ``seatrack/data/methods.toml`` (one table per method), to
+which :func:`register` adds a method at run time.
 
 Every method is a class honouring :class:`seatrack.filters.base.RecursiveFilter` with
 
@@ -32,11 +39,14 @@ from __future__ import annotations
 
 import importlib
 import math
+import tomllib
 from collections.abc import Callable
 from collections.abc import Mapping
 from dataclasses import dataclass
+from importlib import resources
 from typing import TYPE_CHECKING
 from typing import Any
+from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -57,6 +67,17 @@ if TYPE_CHECKING:
 
 __all__ = [
     "METHODS",
+    "GROUPS",
+    "NOISE_RULES",
+    "MethodRecord",
+    "register",
+    "record",
+    "names",
+    "method_help",
+    "read_records",
+    "METHODS_FILE",
+    "list_methods",
+    "methods_table",
     "COMMON_COLUMNS",
     "SENSOR_KEYS",
     "Method",
@@ -70,68 +91,174 @@ __all__ = [
     "describe_method",
 ]
 
-_LV = "seatrack.filters.levels"
-_RT = "seatrack.filters.robust_track"
-_MM = "seatrack.filters.multimodel"
 
-#: method name -> (module, class, one-line description). A ``-spec`` name runs a method
-#: exactly as its source describes; the name without it is the best version of the same
-#: idea (docs/turning.md, docs/robust.md, docs/multimodel.md give the departures and the
-#: evidence).
-METHODS: dict[str, tuple[str, str, str]] = {
-    "ekf": ("seatrack.filters.ekf", "EKF", "constant-velocity EKF on polar plots (fixed q)"),
-    "imm": ("seatrack.filters.cvct_imm", "CVCTIMM", "standard IMM, CV + coordinated turn"),
-    "turning": (
-        "seatrack.filters.turning_imm",
-        "TurningLevels",
-        "turning-target filter: turn decision as a mode probability (level IMM), heading "
-        "filter and fuzzy vote for the output",
-    ),
-    "turning-spec": (
-        "seatrack.filters.turning",
-        "Turning",
-        "CN 104407337 as written: CV-EKF, Q raised by a fuzzy turn-rate vote",
-    ),
-    "robust": (_LV, "RamazanovLevels", "algorithm R's robust update in a level IMM, 2-D"),
-    "robust-spec": (_RT, "Robust", "Ramazanov algorithm R as written (beam frame), 2-D"),
-    "robust-adaptive": (
-        _LV,
-        "ContaminatedLevels",
-        "robust and adaptive: level IMM with the exact contaminated-Gaussian update",
-    ),
-    "robust-adaptive-spec": (
-        _RT,
-        "RobustAdaptive",
-        "Ramazanov algorithm A as written (beam frame, injected P/3, P/10), 2-D",
-    ),
-    "huber": (_LV, "HuberLevels", "Huber M-estimation update in a level IMM, 2-D"),
-    "student-t": (_LV, "StudentTLevels", "VB Student-t update in a level IMM, 2-D"),
-    "ekf-rb": (
-        _RT,
-        "RangeBearingEKF",
-        "2-D range/bearing CV EKF with outlier diagnostics (baseline of robust)",
-    ),
-    "mm": (
-        _LV,
-        "LevelIMM",
-        "multiple-model filter: IMM of process-noise levels (self-tuning), position only",
-    ),
-    "mm-spec": (
-        _MM,
-        "MultiModel",
-        "Gholson & Moose bank as in JP H06-95138's prior art: 10 g hypotheses, position only",
-    ),
-    "mm-rangerate": (
-        "seatrack.filters.cvct_imm",
-        "RangeRateIMM",
-        "multiple-model filter, range rate in the update (IMM: CV, CT, agile CV)",
-    ),
-    "mm-rangerate-spec": (
-        _MM,
-        "MultiModelRangeRate",
-        "JP H06-95138 as written: reliabilities from position and range rate",
-    ),
-}
+#: groups of methods: what a user picks, the baselines they are measured against, and the
+#: reproductions of source documents as written (``NAME-spec``; listed apart)
+GROUPS = ("default", "baseline", "reference")
+#: automatic process-noise rules of :func:`seatrack.tracking.auto.per_track_filter`
+NOISE_RULES = ("levels", "wrap", "own")
+
+
+@dataclass(frozen=True)
+class MethodRecord:
+    """One registered method: everything the tools and the docs say about it.
+
+    Attributes
+    ----------
+    name : the ``--method`` name
+    module, class_name : where its class lives (imported on first use)
+    description : one line: what it is
+    when : one sentence: when to use it (the demo's advice)
+    noise : automatic process-noise rule of the multi-target tracker when the user sets no
+        noise key (:func:`seatrack.tracking.auto.per_track_filter`): ``"levels"`` (its
+        ``q`` is the straight-leg level inside the two-level IMM), ``"wrap"`` (its defaults
+        wrapped in that IMM) or ``"own"`` (its defaults, untouched)
+    docs : the page of ``docs/`` that documents its configuration keys
+    group : ``"default"``, ``"baseline"`` or ``"reference"`` (a source as written)
+    """
+
+    name: str
+    module: str
+    class_name: str
+    description: str
+    when: str
+    noise: str = "own"
+    docs: str = "architecture.md"
+    group: str = "default"
+
+    def __post_init__(self) -> None:
+        if self.group not in GROUPS:
+            raise ValueError(f"group: must be one of {', '.join(GROUPS)}, got {self.group!r}")
+        if self.noise not in NOISE_RULES:
+            raise ValueError(f"noise: must be one of {', '.join(NOISE_RULES)}, got {self.noise!r}")
+        if not self.name or any(c.isspace() for c in self.name):
+            raise ValueError(f"name: a word without spaces, got {self.name!r}")
+
+    @property
+    def path(self) -> str:
+        """``package.module.Class``."""
+        return f"{self.module}.{self.class_name}"
+
+    def load(self) -> Any:
+        """The method's class."""
+        return getattr(importlib.import_module(self.module), self.class_name)
+
+    @property
+    def config(self) -> type:
+        """The method's configuration dataclass (``Class.Config``)."""
+        return cast(type, self.load().Config)
+
+
+#: the data file of the package's methods (``seatrack/data/methods.toml``)
+METHODS_FILE = "methods.toml"
+_FIELDS = {"module": "module", "class": "class_name", "description": "description",
+           "when": "when", "noise": "noise", "docs": "docs", "group": "group"}  # fmt: skip
+
+
+def read_records(text: str, source: str = METHODS_FILE) -> list[MethodRecord]:
+    """The method records of a TOML text: one table per method, keys ``module``,
+    ``class``, ``description``, ``when``, ``noise``, ``docs``, ``group`` (all required).
+
+    Raises
+    ------
+    ConfigError
+        Invalid TOML, a missing or unknown key, a bad group or noise rule.
+    """
+    try:
+        doc = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{source}: {exc}") from None
+    out = []
+    for name, tab in doc.items():
+        keys = set(tab) if isinstance(tab, dict) else set()
+        if keys != set(_FIELDS):
+            missing, extra = sorted(set(_FIELDS) - keys), sorted(keys - set(_FIELDS))
+            raise ConfigError(f"{source}: [{name}]: missing keys {missing}, unknown {extra}")
+        try:
+            out.append(MethodRecord(name, **{_FIELDS[k]: str(v) for k, v in tab.items()}))
+        except ValueError as exc:
+            raise ConfigError(f"{source}: [{name}]: {exc}") from None
+    return out
+
+
+def _package_records() -> list[MethodRecord]:
+    text = (resources.files("seatrack") / "data" / METHODS_FILE).read_text("utf-8")
+    return read_records(text)
+
+
+#: every registered method by name (registration order: the order of ``seatrack evaluate``
+#: rows and of the docs tables); :func:`register` adds one
+METHODS: dict[str, MethodRecord] = {r.name: r for r in _package_records()}
+
+
+def register(record: MethodRecord, *, replace: bool = False) -> MethodRecord:
+    """Add a method to the registry: from then on ``seatrack track --method NAME``,
+    :func:`build`, :func:`run`, the multi-target tracker and the listings take it.
+
+    Raises
+    ------
+    ValueError
+        The name is taken (unless ``replace``).
+    """
+    if record.name in METHODS and not replace:
+        raise ValueError(f"method {record.name!r} is registered already")
+    METHODS[record.name] = record
+    return record
+
+
+def record(name: str) -> MethodRecord:
+    """The registry's record of method ``name`` (ValueError listing the known ones)."""
+    if name not in METHODS:
+        raise ValueError(f"unknown method {name!r}; choose one of {', '.join(sorted(METHODS))}")
+    return METHODS[name]
+
+
+def names(group: str | None = None) -> list[str]:
+    """The registered names (of one group), in registration order."""
+    return [n for n, r in METHODS.items() if group is None or r.group == group]
+
+
+def method_help() -> str:
+    """The help text of ``--method``: the methods to pick, then the baselines and the
+    reproductions of the sources by name."""
+    main = ", ".join(f"{n} ({METHODS[n].description})" for n in names("default"))
+    return (
+        f"filter: {main}; baselines: {', '.join(names('baseline'))}; sources as written: "
+        f"{', '.join(names('reference'))} (seatrack track --list-methods)"
+    )
+
+
+def list_methods() -> str:
+    """Every method, grouped (the reproductions of the sources apart), one line each:
+    name, what it is and when to use it."""
+    titles = {
+        "default": "methods",
+        "baseline": "baselines",
+        "reference": "sources as written (reproductions, for comparison)",
+    }
+    blocks = []
+    for g in GROUPS:
+        group = names(g)
+        if not group:
+            continue
+        width = max(len(n) for n in group)
+        block = [f"{titles[g]}:"]
+        for n in group:
+            block.append(f"  {n:<{width}}  {METHODS[n].description}")
+            block.append(f"  {'':<{width}}  use: {METHODS[n].when}")
+        blocks.append("\n".join(block))
+    return "\n\n".join(blocks)
+
+
+def methods_table() -> str:
+    """The Markdown table of every method (docs/architecture.md and the README carry it
+    verbatim; a test regenerates it)."""
+    rows = ["| name | group | class | what it is | keys in |", "|---|---|---|---|---|"]
+    for n, r in METHODS.items():
+        cls = r.path.removeprefix("seatrack.")
+        rows.append(f"| `{n}` | {r.group} | `{cls}` | {r.description} | docs/{r.docs} |")
+    return "\n".join(rows) + "\n"
+
 
 #: the key of the target class every method accepts (``ship``, ``submarine``, ...)
 TARGET_KEY = "target"
@@ -142,10 +269,7 @@ SENSOR_KEYS = tuple(k for k, name in config_keys(SensorNoise).items() if k != na
 
 def method_class(name: str) -> Any:
     """The class of method ``name`` (ValueError listing the known ones)."""
-    if name not in METHODS:
-        raise ValueError(f"unknown method {name!r}; choose one of {', '.join(sorted(METHODS))}")
-    module, cls, _ = METHODS[name]
-    return getattr(importlib.import_module(module), cls)
+    return record(name).load()
 
 
 def split_config(

@@ -1,12 +1,13 @@
 """The robust sonar filters and their baselines on the filter contract.
 
-``seatrack track --method robust | robust-adaptive | ekf-rb | huber | student-t``: 2-D
+``seatrack track --method robust-spec | robust-adaptive-spec | ekf-rb``: 2-D
 range/bearing filters (3-D plots are tracked in the horizontal plane). ``TrackState.x`` is
 the Cartesian ``[x, y, vx, vy(, ax, ay)]`` (East, North), so states mix by name with every
 other filter; the robust filters keep their beam-frame internals in ``aux``. The maths is
 that of :mod:`seatrack.filters.robust` (algorithms R and A, :func:`robust_update`) and
-:mod:`seatrack.filters.robust_baselines` (the update rules), shared with their Monte-Carlo
-batch functions.
+:mod:`seatrack.filters.robust_baselines` (the EKF update of ``ekf-rb``), shared with their
+Monte-Carlo batch functions. The ``huber`` and ``student-t`` methods are level IMMs
+(:mod:`seatrack.filters.levels`).
 
 A new track starts from the one initiator (:func:`seatrack.filters.base.plot_gaussian`);
 the robust filters project its Cartesian covariance onto the beam frame at the first update
@@ -19,7 +20,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import partial
 from typing import Any
 from typing import ClassVar
 
@@ -49,10 +49,7 @@ from seatrack.filters.robust import beam_to_cartesian_cov
 from seatrack.filters.robust import per_axis_to_flat
 from seatrack.filters.robust import robust_update
 from seatrack.filters.robust import rotate_blocks
-from seatrack.filters.robust_baselines import HuberConfig
-from seatrack.filters.robust_baselines import StudentTConfig
 from seatrack.filters.robust_baselines import plain_update
-from seatrack.filters.robust_baselines import reweighted_update
 from seatrack.geometry import angle_diff
 from seatrack.geometry import rotation_to_beam
 from seatrack.models.measurement import polar_measurement
@@ -63,11 +60,7 @@ FloatArray = NDArray[np.float64]
 __all__ = [
     "SonarMotionConfig",
     "RobustTrackConfig",
-    "HuberTrackConfig",
-    "StudentTTrackConfig",
     "RangeBearingEKF",
-    "Huber",
-    "StudentT",
     "Robust",
     "RobustAdaptive",
 ]
@@ -105,18 +98,8 @@ class SonarMotionConfig:
 
 @dataclass(frozen=True)
 class RobustTrackConfig(RobustConfig, SonarMotionConfig):
-    """Parameters of ``--method robust`` / ``robust-adaptive`` (thresholds of
+    """Parameters of ``--method robust-spec`` / ``robust-adaptive-spec`` (thresholds of
     :class:`RobustConfig` plus the motion model)."""
-
-
-@dataclass(frozen=True)
-class HuberTrackConfig(HuberConfig, SonarMotionConfig):
-    """Parameters of ``--method huber``."""
-
-
-@dataclass(frozen=True)
-class StudentTTrackConfig(StudentTConfig, SonarMotionConfig):
-    """Parameters of ``--method student-t``."""
 
 
 def _per_axis(x: FloatArray, k: int) -> FloatArray:
@@ -195,9 +178,6 @@ class RangeBearingEKF(_Sonar):
     """``--method ekf-rb``: the baseline range/bearing CV EKF (``outlier_*`` diagnostic:
     normalised innovation > 6.63)."""
 
-    def _update_rule(self) -> Any:
-        return plain_update
-
     def predict(self, state: TrackState, t: ArrayLike) -> TrackState:
         tt, dt = step_times(state, t)
         Phi, L0 = self._matrices(dt)
@@ -209,34 +189,13 @@ class RangeBearingEKF(_Sonar):
         z, ok = usable(plots.polar(False), hx)
         with np.errstate(all="ignore"):
             R = np.diag(self.r_nom)
-            res, flags = self._update_rule()(state.x, state.P, z, hx, H, R, check=False)
+            res, flags = plain_update(state.x, state.P, z, hx, H, R, check=False)
         aux = {"outlier": flags & ok[:, None]}
         return finish_update(state, res.x, res.P, res.nis, res.log_likelihood, state.t, aux, ok)
 
 
-class _Reweighted(RangeBearingEKF):
-    """Shared shell of the Huber / Student-t EKFs: :func:`reweighted_update` with the
-    reweighting rule of their configuration."""
-
-    def _update_rule(self) -> Any:
-        return partial(reweighted_update, r_nom=self.r_nom, config=self.config)
-
-
-class Huber(_Reweighted):
-    """``--method huber``: Huber M-estimation EKF (``outlier_*``: Huber weight < 1)."""
-
-    Config: ClassVar[type] = HuberTrackConfig
-
-
-class StudentT(_Reweighted):
-    """``--method student-t``: VB Student-t EKF (``outlier_*``: expected normalised
-    squared residual > ``flag_threshold``)."""
-
-    Config: ClassVar[type] = StudentTTrackConfig
-
-
 class Robust(_Sonar):
-    """``--method robust``: Ramazanov's algorithm R on the contract.
+    """``--method robust-spec``: Ramazanov's algorithm R on the contract.
 
     ``aux``: the beam-frame channel blocks ``Pc (B, 2, k, k)`` (after :meth:`predict`: the
     predicted ones, in the frame of the last update ``psi``), the previous blocks
@@ -302,7 +261,7 @@ class Robust(_Sonar):
 
 
 class RobustAdaptive(Robust):
-    """``--method robust-adaptive``: algorithm A (``adapting`` = 1 while noise is injected
+    """``--method robust-adaptive-spec``: algorithm A (``adapting`` = 1 while noise is injected
     into either beam channel)."""
 
     adaptive: ClassVar[bool] = True

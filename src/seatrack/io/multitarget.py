@@ -47,7 +47,7 @@ from seatrack.io.table import check_input_file
 from seatrack.io.table import check_times
 from seatrack.io.table import decode_text
 from seatrack.io.table import read_csv_table
-from seatrack.tracking import MultiTargetTracker
+from seatrack.tracking import Tracker
 from seatrack.tracking import TrackerConfig
 from seatrack.tracking import TrackerRun
 from seatrack.tracking import TrackStatus
@@ -278,7 +278,7 @@ class UnlabelledRun:
 
     plots: Plots
     run: TrackerRun
-    tracker: MultiTargetTracker
+    tracker: Tracker
     rows: int
     noise: str = "given"  #: process-noise rule (:func:`seatrack.tracking.auto.per_track_filter`)
 
@@ -329,7 +329,7 @@ def track_unlabelled(
     sensor = sensor_noise(m_tab, source)
     plots = read_unlabelled_plots(plots_csv)
     flt, noise = make_filter(method, m_tab, plots, source, tcfg)
-    tracker = MultiTargetTracker(flt.filter, sensor, tcfg)
+    tracker = Tracker(flt.filter, sensor=sensor, config=tcfg)
     run = tracker.run(flt.prepare(plots), all_tracks=all_tracks)
     rows = write_tracks(out, run, plots)
     if plots_out is not None:

@@ -10,7 +10,8 @@ cleaning of a bundled sample and the multi-target tracker on unlabelled plots.
 
 Each section function returns a :class:`Section` (rows of the comparison, text, the PNG
 it wrote); :func:`run_sections` runs them, in worker processes when asked (the results do
-not depend on it). :data:`WHEN` holds one sentence per method on when to use it.
+not depend on it). :data:`WHEN` holds one sentence per capability on when to use it
+(the methods' from the registry, :attr:`seatrack.filters.registry.MethodRecord.when`).
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ from typing import Any
 import numpy as np
 
 from seatrack.compiled import compile_all
+from seatrack.filters.registry import METHODS
 from seatrack.filters.registry import run
 from seatrack.report.plots import save
 from seatrack.report.plots import situation_figure
@@ -37,31 +39,8 @@ from seatrack.simulate.families import labelled_runs
 
 __all__ = ["Row", "Section", "WHEN", "SECTIONS", "run_sections", "rmse_rows"]
 
-#: one sentence per method: when to use it
-WHEN: dict[str, str] = {
-    "ekf": "a fixed-q reference: right when you know the process noise (or give a target "
-    "class); it does not adapt",
-    "imm": "CV + coordinated-turn IMM on converted plots: fast targets in long coordinated turns",
-    "turning": "radar targets that turn now and then: the manoeuvre is a mode probability, "
-    "so a steady turn is followed; outputs turn rate and turn state",
-    "turning-spec": "CN 104407337 as written, for comparison: Q is raised only while the "
-    "turn rate changes, so it lags in a steady turn",
-    "robust-adaptive": "outliers (multipath, clutter hits) AND manoeuvres: the exact "
-    "contaminated-Gaussian update in a self-tuning IMM",
-    "robust-adaptive-spec": "Ramazanov's algorithm A as written: slow marine targets with a "
-    "known disturbance",
-    "robust": "algorithm R's hard outlier test with self-tuning process noise",
-    "robust-spec": "Ramazanov's algorithm R as written: a slow target, constant disturbance",
-    "huber": "baseline: Huber M-estimation update in the same self-tuning IMM",
-    "student-t": "baseline: Student-t plot noise (VB update) in the same self-tuning IMM",
-    "ekf-rb": "baseline of the sonar filters: range/bearing EKF with outlier diagnostics",
-    "mm": "any target when you know only the sensor noise: an IMM of process-noise levels "
-    "(the engine of turning, without its heading outputs)",
-    "mm-spec": "the Gholson & Moose bank of 10 g hypotheses, for comparison",
-    "mm-rangerate": "pulse-Doppler radar on agile targets: range rate in the update of an "
-    "IMM of CV, coordinated-turn and agile CV models (turns and weaving)",
-    "mm-rangerate-spec": "JP H06-95138 as written (range rate only in the reliabilities), for "
-    "comparison",
+#: one sentence per capability: when to use it (the methods' from the registry)
+WHEN: dict[str, str] = {name: r.when for name, r in METHODS.items()} | {
     "tma": "passive sonar, bearings only: batch target motion analysis (own ship manoeuvres)",
     "navigate": "own-ship position from radar echoes of charted landmarks, without GNSS",
     "ais": "real AIS reports of many vessels: outliers flagged, gaps split, tracks smoothed",

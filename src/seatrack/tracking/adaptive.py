@@ -273,6 +273,11 @@ class NoiseLevels:
     def state_names(self) -> tuple[str, ...]:
         return self.flt.state_names
 
+    @property
+    def sensor(self) -> Any:
+        """The wrapped filter's nominal sensor noise (None when it has none)."""
+        return getattr(self.flt, "sensor", None)
+
     # -- helpers ------------------------------------------------------------------------
     @staticmethod
     def _parts(state: TrackState) -> tuple[TrackState, FloatArray]:

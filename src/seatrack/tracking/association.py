@@ -40,8 +40,6 @@ IntArray = NDArray[np.int64]
 
 __all__ = ["components", "contested", "gnn", "jpda", "JpdaResult", "group_logsumexp"]
 
-_BIG = 1e12
-
 
 def components(
     track: IntArray, plot: IntArray, n_tracks: int, n_plots: int

@@ -6,8 +6,10 @@ user gives none.
   configuration table (method keys, sensor keys flat or in ``[sensor]``) for the plots'
   dimensions; 2-D methods track 3-D plots in the horizontal plane.
 * Process noise, when the table has none of the method's noise keys (:data:`NOISE_KEYS`),
-  follows :data:`AUTO_NOISE`, chosen per method on the tuning scenarios of
-  ``benchmarks/multitarget.py --methods`` (disjoint from its evaluation scenarios):
+  follows the method's rule (:attr:`MethodRecord.noise
+  <seatrack.filters.registry.MethodRecord>` in the registry), chosen per method on the
+  tuning scenarios of ``benchmarks/multitarget.py --methods`` (disjoint from its evaluation
+  scenarios):
 
   - ``"levels"`` -- the method's white-noise-acceleration PSD ``q`` is set to the
     straight-leg level of the target class, ``q_s = a_s^2 T`` (``a_s`` = 0.02 m/s^2: sea
@@ -37,9 +39,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from seatrack.filters.registry import NOISE_RULES
 from seatrack.filters.registry import Method
 from seatrack.filters.registry import build
 from seatrack.filters.registry import method_class
+from seatrack.filters.registry import record
 from seatrack.models.motion import ALONG_TRACK_RATIO
 from seatrack.tracking.adaptive import NoiseLevels
 
@@ -51,7 +55,6 @@ __all__ = [
     "TURN_RATE",
     "TURN_ACCEL",
     "TURN_THRESHOLD",
-    "AUTO_NOISE",
     "NOISE_KEYS",
     "scan_period",
     "noise_levels",
@@ -85,28 +88,6 @@ TURN_ACCEL = 0.05
 #: 0 / 0.05 / 0.1 / 0.2 / 0.5 -> 149.56 / 151.05 / 151.62 / 152.54 / 152.48 m, with
 #: 100 / 95 / 65 / 30 / 20 % of the track-scans evaluating them)
 TURN_THRESHOLD = 0.0
-
-#: automatic process noise of each registered method (see the module docstring), from the
-#: mean GOSPA (m) on the tuning scenarios given only the sensor noise, own / wrap [/ levels]
-#: (``python benchmarks/multitarget.py --methods``, method defaults of this revision)
-AUTO_NOISE: dict[str, str] = {
-    "ekf": "levels",  # 180.2 / 181.2 / 152.1 (its default q = 1 suits no target class)
-    "ekf-rb": "wrap",  # 177.3 / 152.2: its sonar q (0.02 m/s^2) needs the manoeuvre level
-    "huber": "own",  # 156.6 / 156.6: a level IMM already (wrap is void)
-    "student-t": "own",  # 155.9 / 155.9: idem
-    "robust": "own",  # 156.6 / 156.6: idem
-    "robust-adaptive": "own",  # 155.8 / 155.8: idem
-    "turning": "own",  # 155.5 / 155.5: idem
-    "imm": "own",  # 183.9 / 183.9: its update starts from its model states (wrap is void)
-    "mm": "own",  # 155.5 / 155.5: a level IMM already
-    "mm-rangerate": "own",  # as mm (needs range rate: not in the tuning scenarios)
-    # the sources' methods run as their sources describe, process noise included
-    "turning-spec": "own",  # 172.4 / 173.5
-    "robust-spec": "own",  # 182.1 / 182.1
-    "robust-adaptive-spec": "own",  # 184.5 / 184.4
-    "mm-spec": "own",  # 248.8 / 248.8
-    "mm-rangerate-spec": "own",
-}
 
 #: configuration keys that set a method's process noise or target class
 NOISE_KEYS = frozenset(
@@ -153,8 +134,8 @@ def per_track_filter(
     table : method keys and sensor keys (flat or ``[sensor]``)
     d, range_rate : the plots' dimensions and whether they carry range rate
     period : scan period (s), for the automatic noise levels
-    rule : override :data:`AUTO_NOISE` (``"levels"``, ``"wrap"``, ``"own"``; for the
-        benchmark that chooses the table)
+    rule : override the registry's rule (``"levels"``, ``"wrap"``, ``"own"``; for the
+        benchmark that chooses the rules)
     turn_rate : rad/s -- coordinated-turn models of the automatic noise IMM, one each way
         (0: none; ``TrackerConfig.turn_rate``)
 
@@ -165,8 +146,8 @@ def per_track_filter(
     tab = dict(table or {})
     if user_gave_noise(tab):
         return build(name, tab, d=d, range_rate=range_rate, source=source), "given"
-    how = rule or AUTO_NOISE.get(name, "own")
-    if how not in ("levels", "wrap", "own"):
+    how = rule or record(name).noise
+    if how not in NOISE_RULES:
         raise ValueError(f"unknown noise rule {how!r}")
     q_s, q_m = noise_levels(period)
     if how == "levels":

@@ -17,13 +17,13 @@ by default ``max_speed / sqrt(6)``: speeds uniform up to ``max_speed``). Free pl
 up to ``init_scans - 1`` scans for a partner, so a missed detection right after a
 target's first plot does not delay its track.
 
-The new track (:meth:`MultiTargetTracker._start
-<seatrack.tracking.tracker.MultiTargetTracker>`) is the first plot with that velocity
-prior (:func:`seatrack.filters.base.plot_gaussian`), predicted to the second plot's time
-and updated with it by the per-track filter: the exact Bayesian fusion of the prior and
-the two plots. Taking the velocity from the difference of the two plots alone
-(:func:`~seatrack.filters.base.two_point_gaussian`) ignores that ships are slow: at 10 km
-a 0.3 deg azimuth error is 50 m, a velocity error of ~30 m/s over a 2.5 s scan.
+The new track (:class:`~seatrack.tracking.initiators.TwoPointInitiator`) is the first
+plot with that velocity prior (:func:`seatrack.filters.base.plot_gaussian`), predicted to
+the second plot's time and updated with it by the per-track filter: the exact Bayesian
+fusion of the prior and the two plots. Taking the velocity from the difference of the two
+plots alone (:func:`~seatrack.filters.base.two_point_gaussian`) ignores that ships are
+slow: at 10 km a 0.3 deg azimuth error is 50 m, a velocity error of ~30 m/s over a 2.5 s
+scan.
 
 **M-of-N confirmation.** A tentative track counts its hits and its age in scans from
 birth (the two initiating plots count as two hits in two scans). It is confirmed as soon

@@ -29,7 +29,7 @@ from seatrack.geometry import wrap_2pi
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["ecef", "north_convergence_rows", "plane_to_wgs84", "vessel_planes"]
+__all__ = ["north_convergence_rows", "plane_to_wgs84", "vessel_planes"]
 
 #: WGS84 semi-major axis (m) and squared eccentricity as PROJ derives it from 1/f
 A_WGS84 = 6378137.0
@@ -152,13 +152,6 @@ def north_convergence_rows(
         _dots_rows(c(lat, dtype=np.float64), c(lon, dtype=np.float64),
                    c(lat0, dtype=np.float64), c(lon0, dtype=np.float64), dots)  # fmt: skip
     return _bearing_or_zero(dots)
-
-
-@njit(cache=True, nogil=True, parallel=True)
-def ecef(lat, lon, out):  # pragma: no cover - compiled
-    """ECEF (m) of points at sea level into ``out`` (N, 3) (PROJ's ``cart``)."""
-    for i in prange(lat.size):
-        out[i, 0], out[i, 1], out[i, 2] = _ecef(lat[i], lon[i])
 
 
 @njit(cache=True, nogil=True, parallel=True)

@@ -58,6 +58,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.errors import UserError
+
 __all__ = [
     "InputError",
     "Rejected",
@@ -86,7 +88,7 @@ MAX_TIME_S = 4_102_444_800.0
 MAX_DISTANCE_M = 1e8
 
 
-class InputError(ValueError):
+class InputError(UserError, ValueError):
     """A user-supplied file or value is malformed. The message names the file, row and problem."""
 
 

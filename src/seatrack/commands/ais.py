@@ -49,24 +49,10 @@ def tracker_config(
     sigma_pos: float, max_gap: float, max_speed: float, max_accel: float, smooth: bool
 ) -> Any:
     """The tracker configuration of the command's options (each checked, by name)."""
-    from seatrack.commands.options import option_positive
-    from seatrack.filters.ais import AisTrackerConfig
+    from seatrack.api.ais import ais_config
 
-    option_positive("--sigma-pos", sigma_pos, 1e4)
-    option_positive("--max-gap", max_gap, 1e9)
-    option_positive("--max-speed", max_speed, 1e4)
-    option_positive("--max-accel", max_accel, 1e3)
-    if sigma_pos < AisTrackerConfig.sigma_pos_min_m:
-        raise InputError(
-            f"--sigma-pos: must be at least {AisTrackerConfig.sigma_pos_min_m} m, got {sigma_pos}"
-        )
-    return AisTrackerConfig(
-        sigma_pos_m=sigma_pos,
-        max_gap_s=max_gap,
-        max_speed_kn=max_speed,
-        max_accel_mps2=max_accel,
-        smooth=smooth,
-    )
+    names = ("--sigma-pos", "--max-gap", "--max-speed", "--max-accel")
+    return ais_config(sigma_pos, max_gap, max_speed, max_accel, smooth, names)
 
 
 def _check_outputs(out: Path, extra: Sequence[Path | None], use_dask: bool) -> None:
@@ -80,63 +66,6 @@ def _check_outputs(out: Path, extra: Sequence[Path | None], use_dask: bool) -> N
     if use_dask and out.suffix.lower() not in (".parquet", ".pq", ".csv"):
         raise InputError(f"--out: with --dask, give a .csv file or a .parquet folder, got {out}")
     prepare_outputs(paths)
-
-
-def run(
-    inputs: Sequence[Path],
-    out: Path,
-    cfg: Any,
-    memory_limit: int,
-    geojson: Path | None = None,
-    html: Path | None = None,
-    tile_url: str | None = None,
-    use_dask: bool = False,
-    scheduler: str | None = None,
-) -> list[str]:
-    """Track ``inputs`` into ``out`` (and the map files); returns the summary lines."""
-    want_map = geojson is not None or html is not None
-    maps: list[Any] = []
-
-    def collect(r: Any, tr: Any) -> None:
-        from seatrack.report.html import map_tracks
-
-        maps.extend(map_tracks(r, tr))
-
-    if use_dask:
-        if want_map:
-            raise InputError("--geojson and --html are not available with --dask")
-        from seatrack.io.ais.cluster import track_files_dask
-
-        summary = track_files_dask(inputs, out, cfg, scheduler=scheduler)
-    else:
-        from seatrack.io.ais.pipeline import track_files
-
-        summary = track_files(
-            inputs, out, cfg, memory_limit=memory_limit, on_group=collect if want_map else None
-        )
-    lines = summary.lines()
-    # the map files through io.atomic whatever the report module does with a path
-    from seatrack.io.atomic import atomic_path
-
-    if geojson is not None:
-        from seatrack.report.html import write_geojson
-
-        with atomic_path(geojson) as tmp:
-            write_geojson(tmp, maps)
-    if html is not None:
-        from seatrack.report.html import write_html
-
-        with atomic_path(html) as tmp:
-            write_html(
-                tmp,
-                maps,
-                title=f"AIS tracks: {', '.join(p.name for p in inputs)}",
-                summary="; ".join(lines),
-                tile_url=tile_url,
-            )
-    lines.append(f"wrote {out} ({summary.rows} rows)")
-    lines += [f"wrote {p}" for p in (geojson, html) if p is not None]
-    return lines
 
 
 def track_files(paths: Sequence[str | Path], config: Any = None) -> tuple[Any, Any]:
@@ -224,7 +153,10 @@ def register(app: typer.Typer) -> None:
         _check_outputs(out, [geojson, html], use_dask)
         for p in inputs:
             check_input_file(p, "an AIS file")
-        for ln in run(inputs, out, cfg, limit, geojson, html, tile_url, use_dask, scheduler):
+        from seatrack.api.ais import track_to_files
+
+        args = (geojson, html, tile_url, use_dask, scheduler)
+        for ln in track_to_files(inputs, out, cfg, limit, *args):
             typer.echo(ln)
 
 

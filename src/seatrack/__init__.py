@@ -23,6 +23,8 @@ use: ``import seatrack`` compiles nothing and imports no plotting library.
 from __future__ import annotations
 
 import importlib
+import sys
+import types
 from typing import TYPE_CHECKING
 from typing import Any
 
@@ -82,6 +84,45 @@ if TYPE_CHECKING:
     from seatrack.api.tma import tma
     from seatrack.api.track import track
     from seatrack.errors import UserError
+
+
+class _Package(types.ModuleType):
+    """The ``seatrack`` module: ``tma``, ``simulate`` and ``evaluate`` are the API functions, not
+    the sub-packages of the same names (which the import system would otherwise bind
+    here when they are imported; they stay importable by their full names)."""
+
+    @property
+    def simulate(self) -> Any:
+        from seatrack.api.simulate import simulate
+
+        return simulate
+
+    @simulate.setter
+    def simulate(self, value: Any) -> None:
+        pass  # the sub-package seatrack.simulate, bound by the import system
+
+    @property
+    def tma(self) -> Any:
+        from seatrack.api.tma import tma
+
+        return tma
+
+    @tma.setter
+    def tma(self, value: Any) -> None:
+        pass  # the sub-package seatrack.tma, bound by the import system
+
+    @property
+    def evaluate(self) -> Any:
+        from seatrack.api.evaluate import evaluate
+
+        return evaluate
+
+    @evaluate.setter
+    def evaluate(self, value: Any) -> None:
+        pass  # the sub-package seatrack.evaluate, bound by the import system
+
+
+sys.modules[__name__].__class__ = _Package
 
 
 def __getattr__(name: str) -> Any:

@@ -178,7 +178,7 @@ def ais(
     )
     with contextlib.ExitStack() as stack:
         if paths_given:
-            inputs = [check_input_file(p, "an AIS file") for p in reports]
+            inputs = [check_input_file(Path(p), "an AIS file") for p in reports]
         else:
             inputs = [stack.enter_context(as_file(reports, "reports"))]
             if isinstance(reports, (str, os.PathLike)):

@@ -45,7 +45,7 @@ def load(scenario: str | os.PathLike[str] | Mapping[str, Any]) -> Any:
 
     if isinstance(scenario, Mapping):
         return parse_scenario(scenario, "scenario (dict)")
-    return load_scenario(resolve_scenario(scenario))
+    return load_scenario(resolve_scenario(os.fspath(scenario)))
 
 
 def simulation_files(scenario: Any, out: Path) -> list[Path]:

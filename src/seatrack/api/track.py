@@ -106,7 +106,7 @@ def config_table(
     elif isinstance(config, Mapping):
         table, source = dict(config), "config"
     else:
-        table, source = load_toml(config), str(config)
+        table, source = load_toml(Path(config)), str(config)
     if sensor is not None:
         if not isinstance(sensor, Sensor):
             raise ConfigError(f"sensor: expected a seatrack.Sensor, got {type(sensor).__name__}")

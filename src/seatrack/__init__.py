@@ -86,40 +86,26 @@ if TYPE_CHECKING:
     from seatrack.errors import UserError
 
 
+def _function_over_package(name: str) -> property:
+    """A property giving the API function ``name`` and ignoring the sub-package of the same
+    name that the import system binds on the ``seatrack`` module when it imports it."""
+
+    def get(self: types.ModuleType) -> Any:
+        return getattr(importlib.import_module(_LAZY[name]), name)
+
+    def ignore(self: types.ModuleType, value: Any) -> None:
+        """The sub-package stays importable by its full name (``seatrack.tma.solver``)."""
+
+    return property(get, ignore)
+
+
 class _Package(types.ModuleType):
-    """The ``seatrack`` module: ``tma``, ``simulate`` and ``evaluate`` are the API functions, not
-    the sub-packages of the same names (which the import system would otherwise bind
-    here when they are imported; they stay importable by their full names)."""
+    """The ``seatrack`` module: ``tma``, ``simulate`` and ``evaluate`` are the API functions,
+    not the sub-packages of the same names."""
 
-    @property
-    def simulate(self) -> Any:
-        from seatrack.api.simulate import simulate
-
-        return simulate
-
-    @simulate.setter
-    def simulate(self, value: Any) -> None:
-        pass  # the sub-package seatrack.simulate, bound by the import system
-
-    @property
-    def tma(self) -> Any:
-        from seatrack.api.tma import tma
-
-        return tma
-
-    @tma.setter
-    def tma(self, value: Any) -> None:
-        pass  # the sub-package seatrack.tma, bound by the import system
-
-    @property
-    def evaluate(self) -> Any:
-        from seatrack.api.evaluate import evaluate
-
-        return evaluate
-
-    @evaluate.setter
-    def evaluate(self, value: Any) -> None:
-        pass  # the sub-package seatrack.evaluate, bound by the import system
+    tma = _function_over_package("tma")
+    simulate = _function_over_package("simulate")
+    evaluate = _function_over_package("evaluate")
 
 
 sys.modules[__name__].__class__ = _Package

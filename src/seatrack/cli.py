@@ -32,7 +32,6 @@ from typing import Any
 
 import typer
 
-from seatrack import __version__
 from seatrack.errors import UserError
 from seatrack.io.atomic import OutputError
 
@@ -61,7 +60,9 @@ app = typer.Typer(
 
 def _print_version(value: bool) -> None:
     if value:
-        typer.echo(f"seatrack {__version__}")
+        from importlib.metadata import version
+
+        typer.echo(f"seatrack {version('seatrack')}")
         raise typer.Exit()
 
 
@@ -78,13 +79,13 @@ def _root(
     """Maritime and radar target tracking and navigation."""
 
 
-def _register() -> None:
-    """Add every command of :data:`COMMAND_MODULES` (a missing module is an ImportError)."""
-    for name in COMMAND_MODULES:
-        importlib.import_module(name).register(app)
+def register_commands(target: typer.Typer, modules: list[str]) -> None:
+    """Add the command of each module to ``target`` (a missing module is an ImportError)."""
+    for name in modules:
+        importlib.import_module(name).register(target)
 
 
-_register()
+register_commands(app, COMMAND_MODULES)
 
 
 #: exceptions that are the user's to fix (printed as ``error: ...``, exit status 2)

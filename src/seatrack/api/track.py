@@ -23,7 +23,15 @@ from seatrack.api.inputs import as_file
 from seatrack.api.sensor import Sensor
 from seatrack.io.table import InputError
 
-__all__ = ["track", "TrackRun", "run_track", "config_table", "track_table", "write_track_csv"]
+__all__ = [
+    "track",
+    "TrackRun",
+    "run_track",
+    "check_method",
+    "config_table",
+    "track_table",
+    "write_track_csv",
+]
 
 #: decimals of the TRACK.csv numbers
 DECIMALS = 6
@@ -80,6 +88,16 @@ def write_track_csv(
             fh.truncate()
             pacsv.write_csv(table, fh, pacsv.WriteOptions(quoting_style="needed"))
     return int(table.num_rows)
+
+
+def check_method(method: str) -> None:
+    """Fail with a :class:`~seatrack.config.ConfigError` listing the registered methods when
+    ``method`` is not one of them."""
+    from seatrack.config import ConfigError
+    from seatrack.filters.registry import METHODS
+
+    if method not in METHODS:
+        raise ConfigError(f"unknown method {method!r}; choose one of {', '.join(sorted(METHODS))}")
 
 
 def config_table(
@@ -174,7 +192,6 @@ def run_track(
 ) -> TrackRun:
     """Read ``plots`` and run ``method`` on them as ``seatrack track`` does (labelled or
     unlabelled by the ``track`` column)."""
-    from seatrack.filters.registry import method_class
     from seatrack.filters.registry import run
     from seatrack.io.multitarget import has_track_column
     from seatrack.io.multitarget import read_unlabelled_plots
@@ -182,7 +199,7 @@ def run_track(
     from seatrack.io.multitarget import tracker_setup
     from seatrack.io.plots import read_plots
 
-    method_class(method)  # unknown method: fail before any work
+    check_method(method)  # unknown method: fail before any work
     tab = dict(table or {})
     with as_file(plots, "plots") as path:
         if not has_track_column(path):

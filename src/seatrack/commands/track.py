@@ -52,13 +52,13 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Run a tracking filter over recorded radar/sonar plots (without a track column:
         the multi-target tracker, see docs/tracking.md)."""
+        from seatrack.api.track import check_method
         from seatrack.api.track import config_table
         from seatrack.api.track import run_track
         from seatrack.commands.options import prepare_outputs
-        from seatrack.filters.registry import method_class
         from seatrack.io.multitarget import write_outputs
 
-        method_class(method)  # unknown method: fail before any work
+        check_method(method)  # unknown method: fail before any work
         prepare_outputs([out, plots_out, plot])
         table, source = config_table(config)
         res = run_track(plots_csv, method, table, source, association, all_tracks)

@@ -63,7 +63,7 @@ __all__ = [
 SHIP_ACCEL = 0.7
 #: acceleration noise on straight legs, m/s^2 (tuning scenarios of
 #: ``benchmarks/multitarget.py``: 0.05 / 0.03 / 0.02 / 0.01 -> mean GOSPA 152.9 / 152.3 /
-#: 152.1 / 152.1 m with the other defaults of this revision; their legs are exactly straight)
+#: 152.1 / 152.1 m with the other defaults of this module; their legs are exactly straight)
 STRAIGHT_ACCEL = 0.02
 #: probability per scan of switching between the noise levels
 P_SWITCH = 0.01
@@ -88,7 +88,7 @@ TURN_THRESHOLD = 0.0
 
 #: automatic process noise of each registered method (see the module docstring), from the
 #: mean GOSPA (m) on the tuning scenarios given only the sensor noise, own / wrap [/ levels]
-#: (``python benchmarks/multitarget.py --methods``, method defaults of this revision)
+#: (``python benchmarks/multitarget.py --methods``, with each method's defaults)
 AUTO_NOISE: dict[str, str] = {
     "ekf": "levels",  # 180.2 / 181.2 / 152.1 (its default q = 1 suits no target class)
     "ekf-rb": "wrap",  # 177.3 / 152.2: its sonar q (0.02 m/s^2) needs the manoeuvre level

@@ -25,8 +25,8 @@ from __future__ import annotations
 import importlib
 import sys
 import types
-from typing import TYPE_CHECKING
-from typing import Any
+
+TYPE_CHECKING = False  # typing.TYPE_CHECKING without importing typing (20 ms)
 
 __version__ = "0.1.0"
 
@@ -75,6 +75,8 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:
+    from typing import Any
+
     from seatrack.api.ais import ais
     from seatrack.api.evaluate import evaluate
     from seatrack.api.navigate import navigate

@@ -9,9 +9,13 @@ written; also an ``OSError``). The command line prints such an error as one
 
 from __future__ import annotations
 
-__all__ = ["UserError"]
+__all__ = ["UserError", "InputError"]
 
 
 class UserError(Exception):
     """A problem in the user's input, configuration or output path; the message says which
     file, line, key or option and what is wrong."""
+
+
+class InputError(UserError, ValueError):
+    """A user-supplied file or value is malformed. The message names the file, row and problem."""

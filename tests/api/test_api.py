@@ -30,6 +30,16 @@ def test_import_seatrack_loads_no_compiled_plotting_or_web_module():
     assert out.stdout.strip() == ""
 
 
+def test_the_command_line_loads_no_compiled_or_plotting_module_before_a_command_runs():
+    code = (
+        "import sys, seatrack.cli\n"
+        "print(','.join(m for m in sys.modules if m.split('.')[0] in "
+        "('numba', 'matplotlib', 'pandas', 'scipy', 'pyarrow')))"
+    )
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == ""
+
+
 def test_public_names_resolve_lazily():
     assert seatrack.__version__
     assert {"tma", "track", "ais", "navigate", "simulate", "evaluate", "Sensor"} <= set(
@@ -138,7 +148,15 @@ def test_sensor_given_as_argument_equals_the_same_config_keys():
 
 @pytest.mark.parametrize(
     "module",
-    ["seatrack.api.sensor", "seatrack.api.track", "seatrack.api.tma", "seatrack.api.simulate"],
+    [
+        "seatrack.api.sensor",
+        "seatrack.api.track",
+        "seatrack.api.tma",
+        "seatrack.api.simulate",
+        "seatrack.api.evaluate",
+        "seatrack.api.ais",
+        "seatrack.api.navigate",
+    ],
 )
 def test_docstring_examples_run(module):
     result = doctest.testmod(importlib.import_module(module), optionflags=doctest.ELLIPSIS)

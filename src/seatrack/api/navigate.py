@@ -140,6 +140,37 @@ def navigate(
     pandas.DataFrame
         The NAV.csv columns: ``time_s, x_m, y_m, heading_deg, vx_mps, vy_mps,
         turn_rate_dps, std_x_m, std_y_m, std_heading_deg``, one row per filter cycle.
+
+    Examples
+    --------
+    A simulated river passage: landmarks along the banks, the radar samples above the
+    threshold (clutter included) and the gyro, given as arrays:
+
+    >>> import numpy as np, seatrack
+    >>> from seatrack.simulate.radar_echoes import channel_landmarks
+    >>> from seatrack.simulate.radar_echoes import river_route
+    >>> from seatrack.simulate.radar_echoes import simulate_radar
+    >>> route = river_route(1500.0, 4.0)
+    >>> marks = channel_landmarks(route, 8, np.random.default_rng(1))
+    >>> sim = simulate_radar(route, marks, np.random.default_rng(2))
+    >>> m = sim.nav_map
+    >>> landmarks = {"id": m.ids, "kind": np.where(m.is_contour, "contour", "point"),
+    ...              "x_m": m.xy[:, 0], "y_m": m.xy[:, 1],
+    ...              "orientation_deg": np.where(m.is_contour, np.degrees(m.orientation), np.nan)}
+    >>> e = sim.echoes
+    >>> echoes = {"time_s": e.t, "antenna_deg": np.degrees(e.antenna), "range_m": e.range}
+    >>> gyro = {"time_s": sim.gyro_t, "turn_rate_dps": np.degrees(sim.gyro_rate)}
+    >>> x0 = sim.truth[0]
+    >>> start = (x0[0], x0[1], np.degrees(x0[2]), np.hypot(x0[3], x0[4]))
+    >>> nav = seatrack.navigate(landmarks, echoes, start=start, gyro=gyro)
+    >>> list(nav.columns[:4])
+    ['time_s', 'x_m', 'y_m', 'heading_deg']
+    >>> late = nav["time_s"] > 60
+    >>> x = np.interp(nav["time_s"], sim.truth_t, sim.truth[:, 0])
+    >>> y = np.interp(nav["time_s"], sim.truth_t, sim.truth[:, 1])
+    >>> err = np.hypot(nav["x_m"] - x, nav["y_m"] - y)[late]
+    >>> bool(np.sqrt(np.mean(err**2)) < 10.0)
+    True
     """
     if len(start) != 4:
         raise InputError(f"start must be (x_m, y_m, heading_deg, speed_mps), got {start!r}")

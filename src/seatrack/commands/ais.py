@@ -24,11 +24,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import typer
 
-from seatrack.io.table import InputError
-from seatrack.io.table import check_input_file
+from seatrack.errors import InputError
 
 _SIZE = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*([kmgt]?)i?b?\s*$", re.IGNORECASE)
 
@@ -96,7 +94,6 @@ def not_utf8(paths: Sequence[Path]) -> Exception:
 
 def register(app: typer.Typer) -> None:
     """Add the ``ais`` sub-command to ``app``."""
-    from seatrack.io.ais.pipeline import DEFAULT_MEMORY_LIMIT
 
     @app.command("ais")
     def ais(
@@ -129,10 +126,11 @@ def register(app: typer.Typer) -> None:
             "--tile-url",
             help="background tiles for the HTML map, e.g. https://.../{z}/{x}/{y}.png",
         ),
-        memory_limit: str = typer.Option(
-            f"{DEFAULT_MEMORY_LIMIT >> 30}G",
+        memory_limit: str | None = typer.Option(
+            None,
             "--memory-limit",
-            help="peak memory to stay near (e.g. 1G, 800M): vessels are tracked in groups",
+            help="peak memory to stay near (e.g. 1G, 800M; default 2G): vessels are tracked "
+            "in groups",
         ),
         use_dask: bool = typer.Option(
             False, "--dask", help="track on a Dask cluster (all files shuffled by MMSI)"
@@ -143,7 +141,9 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Track vessels in AIS logs: smoothed position, course, speed, turn rate, outliers."""
         cfg = tracker_config(sigma_pos, max_gap, max_speed, max_accel, not no_smooth)
-        limit = parse_size(memory_limit)
+        from seatrack.io.ais.pipeline import DEFAULT_MEMORY_LIMIT
+
+        limit = DEFAULT_MEMORY_LIMIT if memory_limit is None else parse_size(memory_limit)
         if scheduler is not None and not use_dask:
             raise InputError("--scheduler needs --dask")
         if use_dask and (geojson is not None or html is not None):
@@ -151,6 +151,8 @@ def register(app: typer.Typer) -> None:
         if tile_url is not None and "{z}" not in tile_url:
             raise InputError(f"--tile-url: needs {{z}}, {{x}} and {{y}}, got {tile_url!r}")
         _check_outputs(out, [geojson, html], use_dask)
+        from seatrack.io.table import check_input_file
+
         for p in inputs:
             check_input_file(p, "an AIS file")
         from seatrack.api.ais import track_to_files
@@ -160,7 +162,7 @@ def register(app: typer.Typer) -> None:
             typer.echo(ln)
 
 
-def track_columns(tracks: Any) -> dict[str, np.ndarray]:
+def track_columns(tracks: Any) -> dict[str, Any]:
     """TRACKS value columns from :class:`~seatrack.filters.ais.AisTracks` (see
     :func:`seatrack.io.ais.output.track_columns`)."""
     from seatrack.io.ais.output import track_columns as columns

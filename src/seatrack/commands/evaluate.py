@@ -6,15 +6,9 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import typer
 
-from seatrack.api.evaluate import MAX_PROCESSES
-from seatrack.api.evaluate import check_skip
-from seatrack.api.evaluate import config_error
-from seatrack.api.evaluate import trial_errors
-
-__all__ = ["register", "MAX_PROCESSES", "check_skip", "config_error", "trial_errors"]
+__all__ = ["register", "print_summary", "write_summary_csv", "write_error_plots"]
 
 
 def register(app: typer.Typer) -> None:
@@ -92,6 +86,7 @@ def print_summary(
     skip: int,
 ) -> None:
     """The summary table (rich on a terminal), the ANEES bounds, failures and the CRB."""
+    import numpy as np
     from rich.console import Console
 
     from seatrack.evaluate.metrics import chi2_interval
@@ -140,6 +135,8 @@ def write_error_plots(
     pngs: list[Path],
 ) -> None:
     """Position RMSE (with the RMS CRB when it applies) and ANEES against time, as PNGs."""
+    import numpy as np
+
     from seatrack.evaluate.metrics import chi2_interval
     from seatrack.evaluate.tracking import time_histories
     from seatrack.report.plots import error_figure

@@ -23,15 +23,9 @@ from typing import Any
 
 import typer
 
-from seatrack.api.navigate import MAX_ANTENNA_OFFSET_M
-from seatrack.api.navigate import MAX_START_SPEED_MPS
-from seatrack.api.navigate import navigator_config
-from seatrack.api.navigate import start_state
-from seatrack.api.options import option_in
-from seatrack.api.options import prepare_outputs
-from seatrack.io.table import InputError
+from seatrack.errors import InputError
 
-__all__ = ["register", "parse_start", "MAX_ANTENNA_OFFSET_M", "MAX_START_SPEED_MPS"]
+__all__ = ["register", "parse_start"]
 
 
 def parse_start(text: str) -> list[float]:
@@ -42,8 +36,10 @@ def parse_start(text: str) -> list[float]:
     ------
     InputError
         Not four numbers, or a value out of range (``|x|, |y| <= 1e8`` m, heading in
-        [-360, 720] deg, ``|speed| <=`` :data:`MAX_START_SPEED_MPS`).
+        [-360, 720] deg, ``|speed| <=`` :data:`seatrack.api.navigate.MAX_START_SPEED_MPS`).
     """
+    from seatrack.api.navigate import start_state
+
     parts = [p.strip() for p in text.split(",")]
     try:
         vals = [float(p) for p in parts]
@@ -57,6 +53,8 @@ def parse_start(text: str) -> list[float]:
 
 
 def _origin(text: str | None) -> tuple[float, float] | None:
+    from seatrack.api.options import option_in
+
     if text is None:
         return None
     try:
@@ -100,6 +98,8 @@ def _with_navigator(command: Callable[..., None]) -> Callable[..., None]:
 
     @functools.wraps(command)
     def run(**kwargs: Any) -> None:
+        from seatrack.api.navigate import navigator_config
+
         cfg = navigator_config(*(kwargs.pop(name) for name, _, _ in _NAVIGATOR_OPTIONS[:5]))
         command(cfg=cfg, **kwargs)
 
@@ -130,6 +130,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Own-ship position and heading from radar echoes of mapped landmarks (JP H03-66630)."""
         from seatrack.api.navigate import run_navigation
+        from seatrack.api.options import prepare_outputs
         from seatrack.io.navigation import write_nav
 
         x0 = parse_start(start)
@@ -166,6 +167,8 @@ def register(app: typer.Typer) -> None:
         cfg: Any = None,
     ) -> None:
         """Correct a landmark map from recorded passages; flag poorly visible landmarks."""
+        from seatrack.api.options import option_in
+        from seatrack.api.options import prepare_outputs
         from seatrack.io.landmarks import read_map_csv
         from seatrack.io.landmarks import write_map_csv
         from seatrack.io.navigation import read_echoes

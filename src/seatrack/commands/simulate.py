@@ -6,20 +6,7 @@ from pathlib import Path
 
 import typer
 
-from seatrack.api.simulate import multitarget_files
-from seatrack.api.simulate import seeded_rng
-from seatrack.api.simulate import simulation_files
-from seatrack.api.simulate import write_multitarget
-from seatrack.api.simulate import write_simulation
-
-__all__ = [
-    "register",
-    "multitarget_files",
-    "seeded_rng",
-    "simulation_files",
-    "write_multitarget",
-    "write_simulation",
-]
+__all__ = ["register"]
 
 
 def register(app: typer.Typer) -> None:

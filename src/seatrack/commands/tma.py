@@ -13,7 +13,7 @@ from pathlib import Path
 
 import typer
 
-from seatrack.io.table import InputError
+from seatrack.errors import InputError
 
 
 def _parse_times(text: str | None) -> list[float] | None:

@@ -9,19 +9,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import numpy as np
 import typer
 
-from seatrack.api.track import track_table
-from seatrack.api.track import write_track_csv
-
-__all__ = ["register", "write_track_csv", "track_table"]
+__all__ = ["register"]
 
 
 def register(app: typer.Typer) -> None:
-    from seatrack.filters.registry import METHODS
-
-    names = ", ".join(f"{k} ({v[2]})" for k, v in METHODS.items())
+    # the method list is not imported here: the registry loads the compiled filters, and
+    # ``seatrack --help`` stays fast; an unknown method is an error listing them
 
     @app.command("track")
     def track(
@@ -30,7 +25,13 @@ def register(app: typer.Typer) -> None:
             help="PLOTS.csv: track, time_s, range_m, azimuth_deg, "
             "[elevation_deg], [range_rate_mps], [sensor_x_m, sensor_y_m, sensor_z_m]",
         ),
-        method: str = typer.Option("ekf", "--method", "-m", help=f"filter: {names}"),
+        method: str = typer.Option(
+            "ekf",
+            "--method",
+            "-m",
+            help="tracking method: ekf, imm, turning, robust, ... (an unknown name lists them "
+            "all; docs/architecture.md describes each)",
+        ),
         config: Path | None = typer.Option(
             None,
             "--config",
@@ -52,9 +53,12 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Run a tracking filter over recorded radar/sonar plots (without a track column:
         the multi-target tracker, see docs/tracking.md)."""
+        import numpy as np
+
         from seatrack.api.track import check_method
         from seatrack.api.track import config_table
         from seatrack.api.track import run_track
+        from seatrack.api.track import write_track_csv
         from seatrack.commands.options import prepare_outputs
         from seatrack.io.multitarget import write_outputs
 

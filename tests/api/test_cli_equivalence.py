@@ -83,8 +83,6 @@ def test_track_unlabelled(sim, tmp_path):
     assert r.returncode == 0, r.stderr
     api = seatrack.track(plots, association="jpda", all_tracks=True)
     _same(_read(out, ("track", "status")), api)
-    # the same plots from a DataFrame
-    _same(api, seatrack.track(pd.read_csv(plots), association="jpda", all_tracks=True))
 
 
 def test_tma(tmp_path):

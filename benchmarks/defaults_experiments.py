@@ -592,11 +592,11 @@ def model_bounds(set_names: Sequence[str], n: int, tuning: bool) -> None:
 
 def gross_outliers(n: int, tuning: bool) -> None:
     """The contaminated sets with 10-sigma outliers (module docstring)."""
-    import seatrack.simulate.families as families
     from defaults import anchor_rows
     from defaults import nominal_config
     from defaults import run_method
     from seatrack.models.targets import target_class
+    from seatrack.simulate import families
 
     families.OUTLIER_SCALE = (100.0, 100.0, 100.0)  # this process only
     ramazanov = {"outlier_scale_range": 10.0, "outlier_scale_azimuth": 25.0}

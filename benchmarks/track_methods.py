@@ -60,7 +60,7 @@ def make_plots(path: Path, n_targets: int, duration: float, seed: int = 1) -> in
 
 def seatrack_track(plots_csv: Path, out: Path, method: str) -> None:
     """What ``seatrack track`` does after start-up."""
-    from seatrack.commands.track import write_track_csv
+    from seatrack.api.track import write_track_csv
 
     plots = read_plots(plots_csv)
     cols = run(method, plots, CONFIG)

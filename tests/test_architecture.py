@@ -2,13 +2,15 @@
 
 Layers point one way (a module imports only from its own layer or lower ones)::
 
-    0  geometry, kalman, models, config, information, jit, data   (foundations)
+    0  geometry, kalman, models, config, information, jit, data, errors   (foundations)
     1  filters, tma, navigation                    (estimators)
     2  tracking                                    (multi-target tracking)
     3  io                                          (file formats: readers and writers)
     4  simulate, evaluate                          (scenarios, statistics; they use io)
     5  report
-    6  commands, cli
+    6  api                                         (the public Python API)
+    7  commands, cli
+    8  the ``seatrack`` package itself (its public names come from the api)
 
 ``io`` sits below ``simulate`` and ``evaluate``: a file format depends on the estimators'
 types only, while a simulator reads scenario files and real data (the AIS replay) and the
@@ -44,6 +46,7 @@ LAYERS: dict[str, int] = {
     "compiled": 0,
     "jit": 0,
     "data": 0,
+    "errors": 0,
     "filters": 1,
     "tma": 1,
     "navigation": 1,
@@ -52,8 +55,11 @@ LAYERS: dict[str, int] = {
     "simulate": 4,
     "evaluate": 4,
     "report": 5,
-    "commands": 6,
-    "cli": 6,
+    "api": 6,
+    "commands": 7,
+    "cli": 7,
+    # the package itself: the public names, loaded from the api on first use
+    "seatrack": 8,
 }
 MAX_LINES = 800
 LONG_FUNCTION = 120

@@ -6,13 +6,16 @@ the commands, keeping ``seatrack --help`` fast.
 
 :func:`main` is the only place that turns exceptions into exit statuses:
 
-* user errors -- a bad input file or value (:class:`seatrack.io.table.InputError`,
-  ``ValueError`` from configuration), an output that cannot be written
-  (:class:`seatrack.io.atomic.OutputError`, any other ``OSError``), a bad command line
-  (click's usage errors) -- print one ``error: ...`` line on standard error, exit 2;
+* user errors -- :class:`seatrack.errors.UserError`: a bad input file or value
+  (:class:`seatrack.io.table.InputError`), a bad configuration
+  (:class:`seatrack.config.ConfigError`), an output that cannot be written
+  (:class:`seatrack.io.atomic.OutputError`); any other ``OSError`` (a missing or unreadable
+  file); a bad command line (click's usage errors) -- print one ``error: ...`` line on
+  standard error, exit 2;
 * an interrupt prints ``error: interrupted``, exit 130;
-* anything else is a bug: one ``internal error: ...`` line asking for a report, exit 1
-  (``SEATRACK_TRACEBACK=1`` re-raises it with its traceback). Tests that drive commands
+* anything else is a bug, a ``ValueError`` that is not a ``UserError`` included: one
+  ``internal error: ...`` line asking for a report, exit 1 (``SEATRACK_TRACEBACK=1``
+  re-raises it with its traceback). Tests that drive commands
   through :func:`main` see exit status 1, never a user-error 2, so bugs are not hidden.
 
 Numerical ``RuntimeWarning``\ s are silenced in the CLI (results with NaN are reported
@@ -29,8 +32,8 @@ from typing import Any
 
 import typer
 
+from seatrack.errors import UserError
 from seatrack.io.atomic import OutputError
-from seatrack.io.table import InputError
 
 #: sub-command modules, in the order ``--help`` lists them
 COMMAND_MODULES = [
@@ -55,27 +58,38 @@ app = typer.Typer(
 )
 
 
+def _print_version(value: bool) -> None:
+    if value:
+        from importlib.metadata import version
+
+        typer.echo(f"seatrack {version('seatrack')}")
+        raise typer.Exit()
+
+
 @app.callback()
-def _root() -> None:
+def _root(
+    version: bool = typer.Option(
+        False,
+        "--version",
+        help="Print the version and exit.",
+        callback=_print_version,
+        is_eager=True,
+    ),
+) -> None:
     """Maritime and radar target tracking and navigation."""
 
 
-def _register() -> None:
-    for name in COMMAND_MODULES:
-        try:
-            mod = importlib.import_module(name)
-        except ModuleNotFoundError as exc:
-            if exc.name == name:  # command not built yet
-                continue
-            raise
-        mod.register(app)
+def register_commands(target: typer.Typer, modules: list[str]) -> None:
+    """Add the command of each module to ``target`` (a missing module is an ImportError)."""
+    for name in modules:
+        importlib.import_module(name).register(target)
 
 
-_register()
+register_commands(app, COMMAND_MODULES)
 
 
 #: exceptions that are the user's to fix (printed as ``error: ...``, exit status 2)
-USER_ERRORS: tuple[type[BaseException], ...] = (InputError, OutputError, ValueError, OSError)
+USER_ERRORS: tuple[type[BaseException], ...] = (UserError, OSError)
 
 
 def _one_line(text: str) -> str:

@@ -37,6 +37,7 @@ from typing import Any
 from typing import TypeVar
 from typing import get_type_hints
 
+from seatrack.errors import UserError
 from seatrack.geometry import G0
 
 __all__ = [
@@ -49,6 +50,7 @@ __all__ = [
     "describe",
     "load_toml",
     "to_edge",
+    "check_fields",
 ]
 
 T = TypeVar("T")
@@ -63,7 +65,7 @@ _FACTORS: dict[str, float] = {
 }
 
 
-class ConfigError(ValueError):
+class ConfigError(UserError, ValueError):
     """A configuration value or key is invalid; the message names the source and the key."""
 
 
@@ -210,6 +212,43 @@ def _check_bounds(v: float, meta: Mapping[str, Any], where: str) -> None:
             raise ConfigError(f"{where}: must be >= {lo:g} {unit}".rstrip() + f", got {v!r}")
     if hi is not None and v > hi:
         raise ConfigError(f"{where}: must be <= {hi:g} {unit}".rstrip() + f", got {v!r}")
+
+
+def check_fields(config: Any) -> None:
+    """Check the numeric fields of a config instance against their :func:`param` bounds.
+
+    For a config dataclass built directly (``SensorNoise(sigma_range=-1.0)``) rather than
+    through :func:`parse_config`: call it from ``__post_init__``. Values are SI (the field
+    unit); the bounds of :func:`param` are in the edge unit and are scaled to SI here, so a
+    value given at a bound passes.
+
+    Raises
+    ------
+    ConfigError
+        ``Class.field (key): must be ..., got VALUE UNIT`` for the first number that is not
+        finite or lies outside its bounds (the value shown in the edge unit).
+    """
+    for f in dataclasses.fields(config):
+        meta = f.metadata
+        v = getattr(config, f.name)
+        if not f.init or "factor" not in meta or isinstance(v, bool):
+            continue
+        if not isinstance(v, (int, float)):
+            continue
+        factor = meta["factor"]
+        unit = meta.get("unit", "")
+        where = f"{type(config).__name__}.{f.name}"
+        if _user_key(f) != f.name:
+            where += f" ({_user_key(f)})"
+        shown = f"{v / factor:g} {unit}".rstrip()
+        if not math.isfinite(v):
+            raise ConfigError(f"{where}: must be finite, got {v!r}")
+        lo, hi = meta.get("min"), meta.get("max")
+        if lo is not None and (v <= lo * factor if meta.get("exclusive_min") else v < lo * factor):
+            op = ">" if meta.get("exclusive_min") else ">="
+            raise ConfigError(f"{where}: must be {op} {lo:g} {unit}".rstrip() + f", got {shown}")
+        if hi is not None and v > hi * factor:
+            raise ConfigError(f"{where}: must be <= {hi:g} {unit}".rstrip() + f", got {shown}")
 
 
 def field_types(cls: type) -> dict[str, Any]:

@@ -3,11 +3,11 @@ another module, and nothing imported from the layers above it (evaluate, io, sim
 report, commands, filters, navigation, tracking) -- checked on the source with ``ast``."""
 
 import ast
+import importlib
 from pathlib import Path
 
-import seatrack.tma
-
-PKG = Path(seatrack.tma.__file__).parent
+# the package by its full name (``seatrack.tma`` on the seatrack module is the API function)
+PKG = Path(importlib.import_module("seatrack.tma").__file__).parent
 ABOVE = ("evaluate", "io", "simulate", "report", "commands", "filters", "navigation", "tracking")
 
 

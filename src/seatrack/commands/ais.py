@@ -24,11 +24,9 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import typer
 
-from seatrack.io.table import InputError
-from seatrack.io.table import check_input_file
+from seatrack.errors import InputError
 
 _SIZE = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*([kmgt]?)i?b?\s*$", re.IGNORECASE)
 
@@ -49,24 +47,10 @@ def tracker_config(
     sigma_pos: float, max_gap: float, max_speed: float, max_accel: float, smooth: bool
 ) -> Any:
     """The tracker configuration of the command's options (each checked, by name)."""
-    from seatrack.commands.options import option_positive
-    from seatrack.filters.ais import AisTrackerConfig
+    from seatrack.api.ais import ais_config
 
-    option_positive("--sigma-pos", sigma_pos, 1e4)
-    option_positive("--max-gap", max_gap, 1e9)
-    option_positive("--max-speed", max_speed, 1e4)
-    option_positive("--max-accel", max_accel, 1e3)
-    if sigma_pos < AisTrackerConfig.sigma_pos_min_m:
-        raise InputError(
-            f"--sigma-pos: must be at least {AisTrackerConfig.sigma_pos_min_m} m, got {sigma_pos}"
-        )
-    return AisTrackerConfig(
-        sigma_pos_m=sigma_pos,
-        max_gap_s=max_gap,
-        max_speed_kn=max_speed,
-        max_accel_mps2=max_accel,
-        smooth=smooth,
-    )
+    names = ("--sigma-pos", "--max-gap", "--max-speed", "--max-accel")
+    return ais_config(sigma_pos, max_gap, max_speed, max_accel, smooth, names)
 
 
 def _check_outputs(out: Path, extra: Sequence[Path | None], use_dask: bool) -> None:
@@ -80,63 +64,6 @@ def _check_outputs(out: Path, extra: Sequence[Path | None], use_dask: bool) -> N
     if use_dask and out.suffix.lower() not in (".parquet", ".pq", ".csv"):
         raise InputError(f"--out: with --dask, give a .csv file or a .parquet folder, got {out}")
     prepare_outputs(paths)
-
-
-def run(
-    inputs: Sequence[Path],
-    out: Path,
-    cfg: Any,
-    memory_limit: int,
-    geojson: Path | None = None,
-    html: Path | None = None,
-    tile_url: str | None = None,
-    use_dask: bool = False,
-    scheduler: str | None = None,
-) -> list[str]:
-    """Track ``inputs`` into ``out`` (and the map files); returns the summary lines."""
-    want_map = geojson is not None or html is not None
-    maps: list[Any] = []
-
-    def collect(r: Any, tr: Any) -> None:
-        from seatrack.report.html import map_tracks
-
-        maps.extend(map_tracks(r, tr))
-
-    if use_dask:
-        if want_map:
-            raise InputError("--geojson and --html are not available with --dask")
-        from seatrack.io.ais.cluster import track_files_dask
-
-        summary = track_files_dask(inputs, out, cfg, scheduler=scheduler)
-    else:
-        from seatrack.io.ais.pipeline import track_files
-
-        summary = track_files(
-            inputs, out, cfg, memory_limit=memory_limit, on_group=collect if want_map else None
-        )
-    lines = summary.lines()
-    # the map files through io.atomic whatever the report module does with a path
-    from seatrack.io.atomic import atomic_path
-
-    if geojson is not None:
-        from seatrack.report.html import write_geojson
-
-        with atomic_path(geojson) as tmp:
-            write_geojson(tmp, maps)
-    if html is not None:
-        from seatrack.report.html import write_html
-
-        with atomic_path(html) as tmp:
-            write_html(
-                tmp,
-                maps,
-                title=f"AIS tracks: {', '.join(p.name for p in inputs)}",
-                summary="; ".join(lines),
-                tile_url=tile_url,
-            )
-    lines.append(f"wrote {out} ({summary.rows} rows)")
-    lines += [f"wrote {p}" for p in (geojson, html) if p is not None]
-    return lines
 
 
 def track_files(paths: Sequence[str | Path], config: Any = None) -> tuple[Any, Any]:
@@ -167,7 +94,6 @@ def not_utf8(paths: Sequence[Path]) -> Exception:
 
 def register(app: typer.Typer) -> None:
     """Add the ``ais`` sub-command to ``app``."""
-    from seatrack.io.ais.pipeline import DEFAULT_MEMORY_LIMIT
 
     @app.command("ais")
     def ais(
@@ -200,10 +126,11 @@ def register(app: typer.Typer) -> None:
             "--tile-url",
             help="background tiles for the HTML map, e.g. https://.../{z}/{x}/{y}.png",
         ),
-        memory_limit: str = typer.Option(
-            f"{DEFAULT_MEMORY_LIMIT >> 30}G",
+        memory_limit: str | None = typer.Option(
+            None,
             "--memory-limit",
-            help="peak memory to stay near (e.g. 1G, 800M): vessels are tracked in groups",
+            help="peak memory to stay near (e.g. 1G, 800M; default 2G): vessels are tracked "
+            "in groups",
         ),
         use_dask: bool = typer.Option(
             False, "--dask", help="track on a Dask cluster (all files shuffled by MMSI)"
@@ -214,7 +141,9 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Track vessels in AIS logs: smoothed position, course, speed, turn rate, outliers."""
         cfg = tracker_config(sigma_pos, max_gap, max_speed, max_accel, not no_smooth)
-        limit = parse_size(memory_limit)
+        from seatrack.io.ais.pipeline import DEFAULT_MEMORY_LIMIT
+
+        limit = DEFAULT_MEMORY_LIMIT if memory_limit is None else parse_size(memory_limit)
         if scheduler is not None and not use_dask:
             raise InputError("--scheduler needs --dask")
         if use_dask and (geojson is not None or html is not None):
@@ -222,13 +151,18 @@ def register(app: typer.Typer) -> None:
         if tile_url is not None and "{z}" not in tile_url:
             raise InputError(f"--tile-url: needs {{z}}, {{x}} and {{y}}, got {tile_url!r}")
         _check_outputs(out, [geojson, html], use_dask)
+        from seatrack.io.table import check_input_file
+
         for p in inputs:
             check_input_file(p, "an AIS file")
-        for ln in run(inputs, out, cfg, limit, geojson, html, tile_url, use_dask, scheduler):
+        from seatrack.api.ais import track_to_files
+
+        args = (geojson, html, tile_url, use_dask, scheduler)
+        for ln in track_to_files(inputs, out, cfg, limit, *args):
             typer.echo(ln)
 
 
-def track_columns(tracks: Any) -> dict[str, np.ndarray]:
+def track_columns(tracks: Any) -> dict[str, Any]:
     """TRACKS value columns from :class:`~seatrack.filters.ais.AisTracks` (see
     :func:`seatrack.io.ais.output.track_columns`)."""
     from seatrack.io.ais.output import track_columns as columns

@@ -20,9 +20,6 @@ from pathlib import Path
 
 import typer
 
-from seatrack.commands.options import option_in
-from seatrack.commands.options import prepare_outputs
-
 #: Monte-Carlo runs of each tracking situation by default
 DEFAULT_RUNS = 10
 #: the most runs a demo may ask for
@@ -33,7 +30,7 @@ SECTION_FILES = ("data/ais_tracks.csv", "data/plots_unlabelled.csv", "data/track
 
 def _outputs(out: Path) -> list[Path]:
     """Every file the demo writes (checked before any work)."""
-    from seatrack.commands.simulate import simulation_files
+    from seatrack.api.simulate import simulation_files
     from seatrack.report.demo import SECTIONS
     from seatrack.simulate.scenarios import bundled_scenario
     from seatrack.simulate.scenarios import load_scenario
@@ -53,7 +50,7 @@ def _write_data(out: Path) -> None:
     """The bundled demo scenario, simulated once, as input files for the commands."""
     import numpy as np
 
-    from seatrack.commands.simulate import write_simulation
+    from seatrack.api.simulate import write_simulation
     from seatrack.simulate.scenarios import bundled_scenario
     from seatrack.simulate.scenarios import load_scenario
 
@@ -63,7 +60,9 @@ def _write_data(out: Path) -> None:
 
 def run_demo(out: Path, runs: int | None, processes: int) -> str:
     """Run every section, write the outputs; returns the text of the comparison."""
-    from seatrack.commands.evaluate import MAX_PROCESSES
+    from seatrack.api.evaluate import MAX_PROCESSES
+    from seatrack.api.options import option_in
+    from seatrack.api.options import prepare_outputs
     from seatrack.io.atomic import atomic_write
     from seatrack.report.demo import run_sections
     from seatrack.report.demo_page import demo_text

@@ -6,49 +6,9 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import typer
 
-from seatrack.commands.options import option_in
-from seatrack.commands.options import prepare_outputs
-from seatrack.io.table import InputError
-
-#: most worker processes
-MAX_PROCESSES = 256
-
-
-def _methods(arg: str | None) -> list[str]:
-    from seatrack.filters.registry import METHODS
-
-    if arg is None or arg.strip() in ("", "all"):
-        return list(METHODS)
-    names = [m.strip() for m in arg.split(",") if m.strip()]
-    for m in names:
-        if m not in METHODS:
-            raise ValueError(f"--methods: unknown method {m!r}; choose from {', '.join(METHODS)}")
-    return names
-
-
-def config_error(path: str, method: str, table: Mapping[str, Any], error: str) -> InputError:
-    """A method that failed with its ``[evaluate.<method>]`` table as a scenario error.
-
-    A string where the method wants a number is named by its key (``evaluate.ekf.q =
-    'abc' is not a number``); any other failure is reported with the table's key path.
-    """
-    if error.startswith("ConfigError: "):  # the config layer names the key already
-        return InputError(f"{path}: {error.removeprefix('ConfigError: ')}")
-    for k, v in table.items():
-        if isinstance(v, str) and f"to float: {v!r}" in error:
-            return InputError(f"{path}: evaluate.{method}.{k} = {v!r} is not a number")
-    return InputError(f"{path}: evaluate.{method}: {error}")
-
-
-def check_skip(skip: int, n_scans: int, sensor: str) -> None:
-    """``--skip`` must leave at least one scan to average."""
-    if not 0 <= skip < n_scans:
-        raise InputError(
-            f"--skip = {skip} must be in [0, {n_scans - 1}]: sensor {sensor} has {n_scans} scans"
-        )
+__all__ = ["register", "print_summary", "write_summary_csv", "write_error_plots"]
 
 
 def register(app: typer.Typer) -> None:
@@ -90,15 +50,10 @@ def register(app: typer.Typer) -> None:
         the 95% chi-square bounds, and the time per plot. Results do not depend on
         --processes.
         """
-        from seatrack.evaluate.tracking import compare_methods
-        from seatrack.evaluate.tracking import position_crb
-        from seatrack.evaluate.tracking import summarize
-        from seatrack.evaluate.tracking import tracking_sensor
-        from seatrack.simulate.scenarios import MAX_RUNS
-        from seatrack.simulate.scenarios import load_scenario
-        from seatrack.simulate.scenarios import resolve_scenario
+        from seatrack.api.evaluate import run_evaluation
+        from seatrack.api.simulate import load
 
-        sc = load_scenario(resolve_scenario(scenario))
+        sc = load(scenario)
         if sc.multitarget is not None:  # unlabelled plots: the multi-target tracker
             from seatrack.evaluate.multitarget import evaluate_multitarget
 
@@ -106,53 +61,19 @@ def register(app: typer.Typer) -> None:
             n_mt, s_mt = sc.runs if runs is None else runs, sc.seed if seed is None else seed
             typer.echo(evaluate_multitarget(sc, n_mt, s_mt, mt, sensor, csv_out, plots))
             return
-        names = _methods(methods)
-        n = sc.runs if runs is None else runs
-        s = sc.seed if seed is None else seed
-        option_in("--runs", n, 1, MAX_RUNS)
-        option_in("--processes", processes, 1, MAX_PROCESSES)
-        option_in("--seed", s, 0, 2**63 - 1)
-        try:
-            sens = tracking_sensor(sc, sensor)
-        except ValueError as exc:
-            raise InputError(f"{'--sensor' if sensor is not None else sc.path}: {exc}") from None
-        check_skip(skip, sens.scan_times(sc.duration).size, sens.name)
         pngs = [plots / "pos_rmse.png", plots / "anees.png"] if plots is not None else []
-        prepare_outputs([csv_out, *pngs], [plots])
-        errors = trial_errors(sc, sens, names, s)
-        res = compare_methods(
-            sc, names, n, s, sensor=sens.name, processes=processes, progress=progress
+        ev = run_evaluation(
+            sc, methods, runs, seed, sensor, skip, processes, progress, [csv_out, *pngs], [plots]
         )
-        dims = 3 if "elevation" in sens.components else 2
-        crb = position_crb(sc, sens.name)
-        rows = summarize(res, names, dims=dims, skip=skip, crb=crb)
-        title = f"{sc.name}: {n} runs, seed {s}, sensor {sens.name}, {len(sc.targets)} target(s)"
-        print_summary(rows, title, n, res.elapsed_s, errors, crb, skip)
+        print_summary(ev.rows, ev.title, ev.runs, ev.result.elapsed_s, ev.errors, ev.crb, skip)
         if csv_out is not None:
-            write_summary_csv(csv_out, rows)
+            write_summary_csv(csv_out, ev.rows)
             typer.echo(f"wrote {csv_out}")
         if pngs:
-            ok = [m for m in names if not errors[m]]
-            write_error_plots(res, ok, dims, sens.scan_times(sc.duration), crb, title, n, pngs)
+            ok = [m for m in ev.names if not ev.errors[m]]
+            t = ev.sensor.scan_times(sc.duration)
+            write_error_plots(ev.result, ok, ev.dims, t, ev.crb, ev.title, ev.runs, pngs)
             typer.echo(f"wrote {pngs[0]} and {pngs[1]}")
-
-
-def trial_errors(sc: Any, sens: Any, names: list[str], seed: int) -> dict[str, str]:
-    """One trial run in this process, before the timed runs (not part of the statistics):
-    it compiles the numba kernels and reports why a method cannot run on this scenario
-    (a method the scenario configured in ``[evaluate.<method>]`` failing is a scenario error).
-    """
-    from seatrack.evaluate.tracking import method_config
-    from seatrack.evaluate.tracking import run_methods
-
-    trial = sc.simulate(np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0]))
-    configs = {m: method_config(sc, sens, m) for m in names}
-    errors = {}
-    for m, rr in run_methods(trial.sensor(sens.name), names, configs).items():
-        errors[m] = next((r.error for r in rr if r.error), "")
-        if errors[m] and m in sc.extra:
-            raise config_error(sc.path, m, sc.extra[m], errors[m])
-    return errors
 
 
 def print_summary(
@@ -165,6 +86,7 @@ def print_summary(
     skip: int,
 ) -> None:
     """The summary table (rich on a terminal), the ANEES bounds, failures and the CRB."""
+    import numpy as np
     from rich.console import Console
 
     from seatrack.evaluate.metrics import chi2_interval
@@ -213,6 +135,8 @@ def write_error_plots(
     pngs: list[Path],
 ) -> None:
     """Position RMSE (with the RMS CRB when it applies) and ANEES against time, as PNGs."""
+    import numpy as np
+
     from seatrack.evaluate.metrics import chi2_interval
     from seatrack.evaluate.tracking import time_histories
     from seatrack.report.plots import error_figure

@@ -23,16 +23,9 @@ from typing import Any
 
 import typer
 
-from seatrack.commands.options import option_in
-from seatrack.commands.options import option_positive
-from seatrack.commands.options import prepare_outputs
-from seatrack.io.table import MAX_DISTANCE_M
-from seatrack.io.table import InputError
+from seatrack.errors import InputError
 
-#: largest own-ship speed accepted in --start, m/s (about 200 kn)
-MAX_START_SPEED_MPS = 100.0
-#: largest antenna offset from the reference point, m
-MAX_ANTENNA_OFFSET_M = 1000.0
+__all__ = ["register", "parse_start"]
 
 
 def parse_start(text: str) -> list[float]:
@@ -43,8 +36,10 @@ def parse_start(text: str) -> list[float]:
     ------
     InputError
         Not four numbers, or a value out of range (``|x|, |y| <= 1e8`` m, heading in
-        [-360, 720] deg, ``|speed| <=`` :data:`MAX_START_SPEED_MPS`).
+        [-360, 720] deg, ``|speed| <=`` :data:`seatrack.api.navigate.MAX_START_SPEED_MPS`).
     """
+    from seatrack.api.navigate import start_state
+
     parts = [p.strip() for p in text.split(",")]
     try:
         vals = [float(p) for p in parts]
@@ -54,33 +49,12 @@ def parse_start(text: str) -> list[float]:
         raise InputError(
             f"--start must be 'x_m,y_m,heading_deg,speed_mps' (4 numbers), got {text!r}"
         )
-    x, y, hd, v = vals
-    option_in("--start x_m", x, -MAX_DISTANCE_M, MAX_DISTANCE_M)
-    option_in("--start y_m", y, -MAX_DISTANCE_M, MAX_DISTANCE_M)
-    option_in("--start heading_deg", hd, -360.0, 720.0)
-    option_in("--start speed_mps", v, -MAX_START_SPEED_MPS, MAX_START_SPEED_MPS)
-    a = math.radians(hd)
-    return [x, y, a, v * math.sin(a), v * math.cos(a), 0.0]
-
-
-def _config(period: float, range_limit: float, offset: float, method: str, clutter: float) -> Any:
-    from dataclasses import replace
-
-    from seatrack.navigation.navigator import NavigatorConfig
-
-    option_positive("--antenna-period", period, 3600.0)
-    option_positive("--range-limit", range_limit, MAX_DISTANCE_M)
-    option_in("--antenna-offset", offset, -MAX_ANTENNA_OFFSET_M, MAX_ANTENNA_OFFSET_M)
-    option_positive("--clutter-density", clutter, 1.0)
-    if method not in ("ekf", "srif"):
-        raise InputError(f"--method must be 'ekf' or 'srif', got {method!r}")
-    cfg = NavigatorConfig(
-        antenna_period=period, range_limit=range_limit, antenna_offset=offset, method=method
-    )
-    return replace(cfg, gate=replace(cfg.gate, clutter_density=clutter))
+    return start_state(*vals)
 
 
 def _origin(text: str | None) -> tuple[float, float] | None:
+    from seatrack.api.options import option_in
+
     if text is None:
         return None
     try:
@@ -93,7 +67,7 @@ def _origin(text: str | None) -> tuple[float, float] | None:
 
 
 #: the navigator options of ``navigate`` and ``survey``: (parameter, type, option); the
-#: first five make the :class:`NavigatorConfig` (:func:`_config`, in this order)
+#: first five make the :class:`NavigatorConfig` (:func:`navigator_config`, in this order)
 _NAVIGATOR_OPTIONS: tuple[tuple[str, Any, Any], ...] = (
     ("antenna_period", float,
      typer.Option(2.5, "--antenna-period", help="Antenna revolution period (s).")),
@@ -124,7 +98,9 @@ def _with_navigator(command: Callable[..., None]) -> Callable[..., None]:
 
     @functools.wraps(command)
     def run(**kwargs: Any) -> None:
-        cfg = _config(*(kwargs.pop(name) for name, _, _ in _NAVIGATOR_OPTIONS[:5]))
+        from seatrack.api.navigate import navigator_config
+
+        cfg = navigator_config(*(kwargs.pop(name) for name, _, _ in _NAVIGATOR_OPTIONS[:5]))
         command(cfg=cfg, **kwargs)
 
     run.__signature__ = sig.replace(parameters=own + extra)  # type: ignore[attr-defined]
@@ -153,19 +129,14 @@ def register(app: typer.Typer) -> None:
         cfg: Any = None,
     ) -> None:
         """Own-ship position and heading from radar echoes of mapped landmarks (JP H03-66630)."""
-        from seatrack.io.landmarks import read_map_csv
-        from seatrack.io.navigation import read_echoes
-        from seatrack.io.navigation import read_gyro
+        from seatrack.api.navigate import run_navigation
+        from seatrack.api.options import prepare_outputs
         from seatrack.io.navigation import write_nav
-        from seatrack.navigation.navigator import navigate
 
         x0 = parse_start(start)
         org = _origin(origin)
         prepare_outputs([out])
-        lm = read_map_csv(map_file, org)
-        ech = read_echoes(echoes)
-        gy = read_gyro(gyro) if gyro is not None else None
-        res = navigate(lm, ech, x0, cfg, gyro=gy)
+        res = run_navigation(map_file, echoes, x0, cfg, gyro, org)
         write_nav(out, res)
         typer.echo(
             f"{res.t.size} filter cycles, {res.n_updates} landmark updates "
@@ -196,6 +167,8 @@ def register(app: typer.Typer) -> None:
         cfg: Any = None,
     ) -> None:
         """Correct a landmark map from recorded passages; flag poorly visible landmarks."""
+        from seatrack.api.options import option_in
+        from seatrack.api.options import prepare_outputs
         from seatrack.io.landmarks import read_map_csv
         from seatrack.io.landmarks import write_map_csv
         from seatrack.io.navigation import read_echoes

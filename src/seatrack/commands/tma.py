@@ -9,16 +9,11 @@ for undetermined values)."""
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import typer
 
-from seatrack.io.table import InputError
-
-if TYPE_CHECKING:
-    from seatrack.tma import Bearings
+from seatrack.errors import InputError
 
 
 def _parse_times(text: str | None) -> list[float] | None:
@@ -41,23 +36,6 @@ def _parse_times(text: str | None) -> list[float] | None:
     if any(b <= a for a, b in zip(out, out[1:], strict=False)):
         raise InputError(f"--manoeuvres: times must be strictly increasing, got {text}")
     return out
-
-
-def _check_manoeuvres(times: list[float], contacts: Mapping[str, Bearings]) -> None:
-    """Every given leg change must fall strictly inside every contact's bearings."""
-    if not times:
-        return
-    for cid, b in contacts.items():
-        if times[0] <= b.t[0]:
-            raise InputError(
-                f"--manoeuvres: {times[0]:g} s is not after the first bearing of "
-                f"contact {cid} ({b.t[0]:g} s)"
-            )
-        if times[-1] >= b.t[-1]:
-            raise InputError(
-                f"--manoeuvres: {times[-1]:g} s is not before the last bearing of "
-                f"contact {cid} ({b.t[-1]:g} s); a leg needs bearings"
-            )
 
 
 def register(app: typer.Typer) -> None:
@@ -94,14 +72,10 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Bearings-only TMA (DE 3446658): position, course and speed of every contact with
         1-sigma / 95 % values, support values, multi-leg targets and an observability check."""
+        from seatrack.api.tma import solve
         from seatrack.io.atomic import atomic_write
         from seatrack.io.atomic import check_output_path
-        from seatrack.io.tma import read_bearings
-        from seatrack.io.tma import read_support
-        from seatrack.io.tma import result_json
         from seatrack.io.tma import solution_summary
-        from seatrack.tma import TMAConfig
-        from seatrack.tma import solve_many
 
         if not (math.isfinite(sigma_deg) and 0 < sigma_deg < 180):
             raise InputError(
@@ -112,22 +86,11 @@ def register(app: typer.Typer) -> None:
         for path in (out, plot):
             if path is not None:
                 check_output_path(path)  # before any work
-        sigma = math.radians(sigma_deg)
-        contacts = read_bearings(bearings, default_sigma=sigma)
-        sup = read_support(support) if support is not None else {}
-        unknown = sorted(set(sup) - set(contacts))
-        if unknown:
-            raise InputError(
-                f"{support}: support values for contact(s) {', '.join(unknown)} not in {bearings}"
-            )
         times = _parse_times(manoeuvres)
-        if times is not None:
-            _check_manoeuvres(times, contacts)
-        man: list[float] | str | None = (
-            times if times is not None else (None if no_detect else "auto")
-        )
-        sols = solve_many(contacts, sup, man, sigma=sigma, config=TMAConfig(sigma=sigma))
-        text = result_json(sols)
+        names = {"sigma_deg": "--sigma-deg", "manoeuvres": "--manoeuvres"}
+        res = solve(bearings, sigma_deg, None, support, times, not no_detect, names)
+        sols = res.solutions
+        text = res.to_json()
         if out is not None:
             with atomic_write(out) as fh:
                 fh.write(text)
@@ -141,6 +104,6 @@ def register(app: typer.Typer) -> None:
         if plot is not None:
             from seatrack.report.tma import plot_solutions
 
-            plot_solutions(contacts, sols, plot)
+            plot_solutions(res.bearings, sols, plot)
             if out is not None:
                 typer.echo(f"wrote {plot}")

@@ -48,6 +48,7 @@ from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
 from seatrack import kalman
+from seatrack.config import check_fields
 from seatrack.config import param
 from seatrack.filters.converted import convert_plots
 from seatrack.filters.converted import polar_jacobian
@@ -382,6 +383,9 @@ class SensorNoise:
         1.0, key="sigma_range_rate_mps", unit="m/s", doc="range-rate noise std", min=0,
         exclusive_min=True, max=1e5,
     )  # fmt: skip
+
+    def __post_init__(self) -> None:
+        check_fields(self)  # bounds of the keys also when built directly
 
 
 def speed_sigma_param(default: float, aliases: Sequence[str] = ()) -> Any:

@@ -29,6 +29,8 @@ from pathlib import Path
 from typing import IO
 from typing import Any
 
+from seatrack.errors import UserError
+
 __all__ = [
     "OutputError",
     "atomic_path",
@@ -39,7 +41,7 @@ __all__ = [
 ]
 
 
-class OutputError(OSError):
+class OutputError(UserError, OSError):
     """An output file cannot be written; the message names the file and the reason."""
 
 

@@ -67,6 +67,10 @@ __all__ = [
     "write_plot_labels",
     "write_unlabelled_plots",
     "track_unlabelled",
+    "run_unlabelled",
+    "tracker_setup",
+    "tracks_text",
+    "write_outputs",
     "UnlabelledRun",
 ]
 
@@ -202,8 +206,9 @@ def _text(a: NDArray[Any]) -> NDArray[Any]:
     return a.astype(str)
 
 
-def write_tracks(path: str | Path, run: TrackerRun, plots: Plots) -> int:
-    """Write TRACKS.csv (see the module docstring); returns the number of rows."""
+def tracks_text(run: TrackerRun, plots: Plots) -> tuple[list[str], list[NDArray[Any]]]:
+    """TRACKS.csv as text: the header and one column of cells per name (6 decimals, NaN
+    and a coasting track's ``plot_line`` empty)."""
     extra = [c for c in run.columns if c not in COMMON_COLUMNS]
     n = run.t.size
     labels = np.array([s.label for s in TrackStatus])
@@ -217,11 +222,17 @@ def write_tracks(path: str | Path, run: TrackerRun, plots: Plots) -> int:
         np.where(line >= 0, line.astype(str), ""),
         *(_text(np.asarray(run.columns[c])) for c in extra),
     ]
+    return ["track", "time_s", *COMMON_COLUMNS, "status", "plot_line", *extra], cols
+
+
+def write_tracks(path: str | Path, run: TrackerRun, plots: Plots) -> int:
+    """Write TRACKS.csv (see the module docstring); returns the number of rows."""
+    header, cols = tracks_text(run, plots)
     with atomic_write(path, newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(["track", "time_s", *COMMON_COLUMNS, "status", "plot_line", *extra])
+        w.writerow(header)
         w.writerows(zip(*cols, strict=True))
-    return n
+    return int(run.t.size)
 
 
 def write_unlabelled_plots(path: str | Path, plots: Plots) -> int:
@@ -304,6 +315,39 @@ class UnlabelledRun:
         )  # fmt: skip
 
 
+def tracker_setup(
+    table: Mapping[str, Any], source: str = "config", association: str | None = None
+) -> tuple[TrackerConfig, SensorNoise, dict[str, Any]]:
+    """The tracker configuration, the sensor noise and the method table of a configuration
+    table (:func:`split_config`); ``association`` (``gnn`` or ``jpda``) overrides the
+    table's."""
+    t_tab, m_tab = split_config(table, source)
+    if association is not None:
+        if association not in ("gnn", "jpda"):
+            raise InputError(f"--association: must be gnn or jpda, got {association!r}")
+        t_tab = {**t_tab, "association": association}
+    tcfg = parse_config(TrackerConfig, t_tab, source=source)
+    return tcfg, sensor_noise(m_tab, source), m_tab
+
+
+def run_unlabelled(
+    plots: Plots,
+    method: str,
+    table: Mapping[str, Any],
+    source: str = "config",
+    association: str | None = None,
+    all_tracks: bool = False,
+) -> UnlabelledRun:
+    """The multi-target tracker of ``seatrack track`` on unlabelled plots: the per-track
+    filter of :func:`make_filter` (automatic noise levels), the sensor noise and tracker
+    keys of ``table``; ``rows`` of the result is the number of TRACKS rows."""
+    tcfg, sensor, m_tab = tracker_setup(table, source, association)
+    flt, noise = make_filter(method, m_tab, plots, source, tcfg)
+    tracker = Tracker(flt.filter, sensor=sensor, config=tcfg)
+    run = tracker.run(flt.prepare(plots), all_tracks=all_tracks)
+    return UnlabelledRun(plots, run, tracker, int(run.t.size), noise)
+
+
 def track_unlabelled(
     plots_csv: Path,
     out: Path,
@@ -320,24 +364,27 @@ def track_unlabelled(
             check_output_path(p)
     table = load_toml(config) if config is not None else {}
     source = str(config) if config is not None else "config"
-    t_tab, m_tab = split_config(table, source)
-    if association is not None:
-        if association not in ("gnn", "jpda"):
-            raise ValueError(f"--association: must be gnn or jpda, got {association!r}")
-        t_tab = {**t_tab, "association": association}
-    tcfg = parse_config(TrackerConfig, t_tab, source=source)
-    sensor = sensor_noise(m_tab, source)
+    tracker_setup(table, source, association)  # configuration errors before the plots
     plots = read_unlabelled_plots(plots_csv)
-    flt, noise = make_filter(method, m_tab, plots, source, tcfg)
-    tracker = Tracker(flt.filter, sensor=sensor, config=tcfg)
-    run = tracker.run(flt.prepare(plots), all_tracks=all_tracks)
-    rows = write_tracks(out, run, plots)
+    res = run_unlabelled(plots, method, table, source, association, all_tracks)
+    write_outputs(res, out, plots_out, plot, f"{Path(plots_csv).name}: {method}")
+    return res.summary(method, out)
+
+
+def write_outputs(
+    res: UnlabelledRun,
+    out: Path,
+    plots_out: Path | None = None,
+    plot: Path | None = None,
+    title: str = "",
+) -> None:
+    """TRACKS.csv, and the plot labels and the picture when asked for."""
+    write_tracks(out, res.run, res.plots)
     if plots_out is not None:
-        write_plot_labels(plots_out, plots, run.plot_track)
+        write_plot_labels(plots_out, res.plots, res.run.plot_track)
     if plot is not None:
-        save_picture(plot, plots, run, title=f"{Path(plots_csv).name}: {method} + "
-                     f"{tcfg.association.upper()}")  # fmt: skip
-    return UnlabelledRun(plots, run, tracker, rows, noise).summary(method, out)
+        assoc = res.tracker.config.association.upper()
+        save_picture(plot, res.plots, res.run, title=f"{title} + {assoc}")
 
 
 def save_picture(

@@ -58,6 +58,8 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.errors import InputError
+
 __all__ = [
     "InputError",
     "Rejected",
@@ -84,10 +86,6 @@ __all__ = [
 MAX_TIME_S = 4_102_444_800.0
 #: largest accepted distance or |coordinate| in metres (about 15 Earth radii)
 MAX_DISTANCE_M = 1e8
-
-
-class InputError(ValueError):
-    """A user-supplied file or value is malformed. The message names the file, row and problem."""
 
 
 @dataclass(frozen=True)

@@ -28,6 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
+from seatrack.errors import InputError
 from seatrack.geometry import TWO_PI
 from seatrack.geometry import bearing
 from seatrack.geometry import wrap_pi
@@ -197,7 +198,7 @@ def _antenna_unwrap(
     worst = int(np.argmax(np.abs(res)))
     if abs(res[worst]) > tol:
         loc = f"line {where.lines[worst]}" if where.lines is not None else f"row {worst + 1}"
-        raise ValueError(
+        raise InputError(
             f"{where.source}, {loc}: antenna angle deviates {np.degrees(abs(res[worst])):.1f} deg "
             f"from a constant rotation of period {T:g} s; set the antenna period"
         )
@@ -215,12 +216,12 @@ def _tick_count(et: FloatArray, start: float, dt: float, where: Echoes) -> int:
     last = int(et.size - 1)
     loc = f"line {where.lines[last]}" if where.lines is not None else f"row {last + 1}"
     if not (np.isfinite(n) and n <= MAX_TICKS):
-        raise ValueError(
+        raise InputError(
             f"{where.source}, {loc}: the echo log spans {span:g} s, {n:.3g} filter cycles of "
             f"{dt:g} s; at most {MAX_TICKS} are run (split the log)"
         )
     if n < 1:
-        raise ValueError(
+        raise InputError(
             f"{where.source}, {loc}: the echo log spans {span:g} s, less than one filter "
             f"cycle ({dt:g} s)"
         )
@@ -487,7 +488,7 @@ def navigate(
     cfg = config or NavigatorConfig()
     et = np.asarray(echoes.t, float)
     if et.size == 0:
-        raise ValueError("the echo log is empty")
+        raise InputError("the echo log is empty")
     start = float(et[0] if t0 is None else t0)
     sweep = _Sweep.of(echoes, start, cfg)
     P0 = np.diag(np.asarray(cfg.init_std, float) ** 2)

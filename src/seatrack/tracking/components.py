@@ -31,6 +31,7 @@ from typing import runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.config import check_fields
 from seatrack.config import param
 from seatrack.config import parse_config
 from seatrack.filters.base import Plots
@@ -180,6 +181,7 @@ class TrackerConfig:
     )
 
     def __post_init__(self) -> None:
+        check_fields(self)  # bounds of the keys also when built directly
         mn = tuple(self.m_of_n)
         if len(mn) != 2 or any(float(v) != int(v) for v in mn):
             raise ValueError(f"m_of_n: expected two integers [M, N], got {list(mn)}")

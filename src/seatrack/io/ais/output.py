@@ -352,5 +352,5 @@ def write_tracks(path: str | Path, r: AisReports, columns: dict[str, NDArray]) -
 
 
 def write_tracks_csv(path: str | Path, r: AisReports, columns: dict[str, NDArray]) -> int:
-    """:func:`write_tracks` (kept for callers of the CSV-only name)."""
+    """:func:`write_tracks` under its CSV-only name (the format follows the suffix)."""
     return write_tracks(path, r, columns)

@@ -45,6 +45,42 @@ tracks = {a: seatrack.track(plots, sensor=sensor, association=a) for a in ("gnn"
 tracks["gnn"].groupby("track")[["time_s"]].agg(["min", "max", "count"])
 
 # %% [markdown]
+# ## A user's own associator
+#
+# The tracker is built from roles (`seatrack.tracking.roles`: associator, initiator,
+# track manager). A greedy nearest-neighbour associator -- the likeliest gated pair
+# first, each plot and track used once -- is a few lines; `seatrack.track` runs it in
+# place of GNN / JPDA, every other role unchanged (docs/tracking.md explains the
+# arguments).
+
+# %%
+from seatrack.tracking.existence import ipda_update
+from seatrack.tracking.existence import probability
+from seatrack.tracking.roles import UPDATED
+from seatrack.tracking.roles import Association
+
+
+class NearestNeighbour:
+    """Greedy nearest neighbour: the likeliest gated pair first, each plot used once."""
+
+    def associate(self, flt, pred, scan, hyp):
+        plot, lr = np.full(len(pred), -1), np.full(len(pred), -np.inf)
+        for k in np.argsort(-hyp.log_lr, kind="stable"):
+            i, j = hyp.track[k], hyp.plot[k]
+            if plot[i] < 0 and j not in plot and hyp.weight[k] > hyp.log_miss[i]:
+                plot[i], lr[i] = j, hyp.log_lr[k]
+        ti = np.flatnonzero(plot >= 0)
+        upd = flt.update(pred.take(ti), scan.plots.take(plot[ti]))
+        hit = np.zeros(len(pred), bool)
+        hit[ti] = upd.status == UPDATED
+        logit = ipda_update(hyp.logit, scan.log_miss_pg, np.where(hit, lr, -np.inf))
+        scan.explained += float(probability(logit[hit]).sum())
+        return Association(pred.put(ti, upd), np.where(hit, plot, -1), hit, logit)
+
+
+tracks["nearest"] = seatrack.track(plots, sensor=sensor, association=NearestNeighbour())
+
+# %% [markdown]
 # Each association confirms the three ships; their last estimated positions:
 
 # %%

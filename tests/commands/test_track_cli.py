@@ -174,8 +174,9 @@ def test_track_label_with_a_comma_is_quoted(tmp_path):
 
 def test_list_methods_comes_from_the_registry(tmp_path):
     """``--list-methods`` prints the registry's listing (the reproductions of the sources
-    apart, after the methods to pick) and needs no input file; ``--help`` names the
-    methods of the registry."""
+    apart, after the methods to pick) and needs no input file; ``--help`` points to it
+    (the help names no method list of its own: importing the registry would make
+    ``seatrack --help`` slow)."""
     from seatrack.filters.registry import METHODS
     from seatrack.filters.registry import list_methods
 
@@ -186,5 +187,4 @@ def test_list_methods_comes_from_the_registry(tmp_path):
     assert all(f"  {n} " in sources for n in METHODS if n.endswith("-spec"))
     assert not any(f"  {n} " in picked for n in METHODS if n.endswith("-spec"))
     help_text = " ".join(_seatrack("track", "--help", cwd=tmp_path).stdout.split())
-    assert "--list-methods" in help_text and "huber" in help_text
-    assert "sources as written" in help_text
+    assert "--list-methods" in help_text

@@ -189,6 +189,7 @@ def run_track(
     source: str = "config",
     association: str | None = None,
     all_tracks: bool = False,
+    associator: Any = None,
 ) -> TrackRun:
     """Read ``plots`` and run ``method`` on them as ``seatrack track`` does (labelled or
     unlabelled by the ``track`` column)."""
@@ -205,7 +206,7 @@ def run_track(
         if not has_track_column(path):
             tracker_setup(tab, source, association)  # configuration errors before the plots
             p = read_unlabelled_plots(path)
-            res = run_unlabelled(p, method, tab, source, association, all_tracks)
+            res = run_unlabelled(p, method, tab, source, association, all_tracks, associator)
             return TrackRun(method, p, tracker=res)
         p = read_plots(path)
     return TrackRun(method, p, columns=run(method, p, tab, source=source))
@@ -218,7 +219,7 @@ def track(
     sensor: Sensor | None = None,
     config: Mapping[str, Any] | str | os.PathLike[str] | None = None,
     target: str | None = None,
-    association: str | None = None,
+    association: Any = None,
     all_tracks: bool = False,
 ) -> Any:
     """Track radar or sonar plots with one method, exactly as ``seatrack track``.
@@ -242,9 +243,10 @@ def track(
     target : str, optional
         Target class (``ship``, ``submarine``, ``aircraft``, ``fighter``) setting the
         method's process noise and manoeuvre parameters.
-    association : {"gnn", "jpda"}, optional
-        Unlabelled plots: the data association (default: the config's, else GNN).
-        Labelled plots do not use it.
+    association : {"gnn", "jpda"} or Associator, optional
+        Unlabelled plots: the data association (default: the config's, else GNN), or an
+        object with the :class:`seatrack.tracking.roles.Associator` protocol (a user's
+        own associator; every other role stays the default). Labelled plots do not use it.
     all_tracks : bool
         Unlabelled plots: also the rows of tentative tracks.
 
@@ -280,7 +282,15 @@ def track(
     >>> bool(abs(out["vx_mps"].iloc[-1] - 10.0) < 2.0)
     True
     """
+    associator = None
+    if association is not None and not isinstance(association, str):
+        if not callable(getattr(association, "associate", None)):
+            raise InputError(
+                f"association: must be gnn, jpda or an Associator (with an associate method), "
+                f"got {association!r}"
+            )
+        associator, association = association, None
     if association is not None and association not in ("gnn", "jpda"):
         raise InputError(f"association: must be gnn or jpda, got {association!r}")
     table, source = config_table(config, sensor, target)
-    return run_track(plots, method, table, source, association, all_tracks).frame()
+    return run_track(plots, method, table, source, association, all_tracks, associator).frame()

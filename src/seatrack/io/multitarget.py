@@ -48,6 +48,7 @@ from seatrack.io.table import check_times
 from seatrack.io.table import decode_text
 from seatrack.io.table import read_csv_table
 from seatrack.tracking import Tracker
+from seatrack.tracking.roles import Associator
 from seatrack.tracking import TrackerConfig
 from seatrack.tracking import TrackerRun
 from seatrack.tracking import TrackStatus
@@ -337,13 +338,15 @@ def run_unlabelled(
     source: str = "config",
     association: str | None = None,
     all_tracks: bool = False,
+    associator: Associator | None = None,
 ) -> UnlabelledRun:
     """The multi-target tracker of ``seatrack track`` on unlabelled plots: the per-track
     filter of :func:`make_filter` (automatic noise levels), the sensor noise and tracker
-    keys of ``table``; ``rows`` of the result is the number of TRACKS rows."""
+    keys of ``table``; ``rows`` of the result is the number of TRACKS rows. ``associator``
+    replaces the configured association role (:class:`seatrack.tracking.roles.Associator`)."""
     tcfg, sensor, m_tab = tracker_setup(table, source, association)
     flt, noise = make_filter(method, m_tab, plots, source, tcfg)
-    tracker = Tracker(flt.filter, sensor=sensor, config=tcfg)
+    tracker = Tracker(flt.filter, associator=associator, sensor=sensor, config=tcfg)
     run = tracker.run(flt.prepare(plots), all_tracks=all_tracks)
     return UnlabelledRun(plots, run, tracker, int(run.t.size), noise)
 

@@ -48,12 +48,12 @@ from seatrack.io.table import check_times
 from seatrack.io.table import decode_text
 from seatrack.io.table import read_csv_table
 from seatrack.tracking import Tracker
-from seatrack.tracking.roles import Associator
 from seatrack.tracking import TrackerConfig
 from seatrack.tracking import TrackerRun
 from seatrack.tracking import TrackStatus
 from seatrack.tracking.auto import per_track_filter
 from seatrack.tracking.auto import scan_period
+from seatrack.tracking.roles import Associator
 
 FloatArray = NDArray[np.float64]
 

@@ -322,7 +322,7 @@ def determined_parameters(
     zero = norms <= 0
     s = np.where(zero, 1.0, norms)
     Js = Jw / s
-    _, sv, Vt = np.linalg.svd(Js, full_matrices=True)
+    _, sv, Vt = np.linalg.svd(Js, full_matrices=Js.shape[0] < Js.shape[1])
     sv = np.concatenate([sv, np.zeros(Vt.shape[0] - sv.size)])
     null = Vt[sv <= rtol * max(float(sv[0]), 1e-300)]
     Gs = G / s
@@ -412,7 +412,10 @@ def finalise(
         est_rows = np.eye(na)[n:]
         funcs = np.concatenate([funcs, est_rows])
         names += [f"f0:{k}" for k in np.asarray(tonals)[~fixed]]
-    det = determined_parameters(Jw, funcs, cfg.rank_tolerance)
+    if chk.full_rank:
+        det = np.ones(len(names), bool)
+    else:
+        det = determined_parameters(Jw, funcs, cfg.rank_tolerance)
     if not observable:  # bearings alone fix only the bearing; other rows follow the rank test
         geometry = dev > cfg.min_observer_deviation or extra > 0
         det = det & (np.arange(det.size) == 3) if not geometry or chk.full_rank else det

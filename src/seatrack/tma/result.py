@@ -136,6 +136,7 @@ class TMASolution:
         ``f0:<tonal>`` of each estimated tonal: True when the data determine it (see
         :func:`determined_parameters`).
     leg_estimates : :class:`LastEstimate` at the last bearing of each leg.
+    sound_speed : m/s, of the frequency model.
     """
 
     t0: float
@@ -167,6 +168,7 @@ class TMASolution:
     nis: dict[str, tuple[float, int]] = field(default_factory=dict)
     determined: dict[str, bool] = field(default_factory=dict)
     leg_estimates: tuple[LastEstimate, ...] = ()
+    sound_speed: float = 1500.0
 
     @property
     def valid(self) -> bool:
@@ -442,4 +444,5 @@ def finalise(
         determined={k: bool(v) for k, v in zip(names, det, strict=True)},
         leg_estimates=_leg_estimates(bearings, starts, fit.beta, None if P_full is None else P,
                                      valid, cfg.confidence),
+        sound_speed=cfg.sound_speed,
     )  # fmt: skip

@@ -1,7 +1,10 @@
-"""``seatrack tma BEARINGS.csv``: bearings-only target motion analysis of every contact.
+"""``seatrack tma BEARINGS.csv`` / ``seatrack tma SENSOR.rep [TRACKS.rep ...]``: target
+motion analysis of every contact from bearings and, when given, tonal frequencies, angles
+on the bow and ranges.
 
-Formats: see :mod:`seatrack.io.tma` and ``docs/formats.md``. Without ``--manoeuvres`` the
-target leg changes are detected from the bearing residuals (``--no-detect`` fits one leg).
+Formats: see :mod:`seatrack.io.tma`, :mod:`seatrack.io.rep` and ``docs/formats.md``.
+Without ``--manoeuvres`` the target leg changes are detected from the residuals
+(``--no-detect`` fits one leg).
 Without ``--out`` the RESULT.json object is printed to standard output. Output paths are
 checked before any work and written atomically; RESULT.json is always valid JSON (``null``
 for undetermined values)."""
@@ -60,13 +63,24 @@ def _check_manoeuvres(times: list[float], contacts: Mapping[str, Bearings]) -> N
             )
 
 
+def _times(b: Bearings) -> list[float]:
+    """Every measurement time of a contact (s)."""
+    out = b.t.tolist()
+    for extra in (b.frequencies, b.bow_angles):
+        if extra is not None:
+            out += extra.t.tolist()
+    return out
+
+
 def register(app: typer.Typer) -> None:
     @app.command("tma")
     def tma(
-        bearings: Path = typer.Argument(
+        bearings: list[Path] = typer.Argument(
             ...,
             help="BEARINGS.csv with columns time_s, bearing_deg, observer_x_m, observer_y_m; "
-            "optional contact, sigma_deg.",
+            "optional contact, sigma_deg, frequency_hz, frequency_sigma_hz, tonal, atb_deg, "
+            "atb_sigma_deg, range_m, range_sigma_m, observer_vx_mps, observer_vy_mps. Or one "
+            "or several Debrief REP files (sensor lines and the host tracks' fixes).",
         ),
         support: Path | None = typer.Option(
             None,
@@ -91,12 +105,40 @@ def register(app: typer.Typer) -> None:
         no_detect: bool = typer.Option(
             False, "--no-detect", help="Without --manoeuvres: fit one leg, no detection."
         ),
+        sound_speed: float = typer.Option(
+            1500.0, "--sound-speed", help="Speed of sound (m/s) of the frequency model."
+        ),
+        base_frequency: list[str] = typer.Option(
+            [],
+            "--base-frequency",
+            help="Known base frequency TONAL=HZ (repeatable); "
+            "tonals not given have theirs estimated.",
+        ),
+        frequency_sigma: list[str] = typer.Option(
+            [],
+            "--frequency-sigma",
+            help="Frequency sigma HZ (every tonal) or TONAL=HZ "
+            "(repeatable) where the input has none; default 0.1 Hz.",
+        ),
+        atb_sigma_deg: float = typer.Option(
+            10.0, "--atb-sigma-deg", help="ATB sigma (deg) where the file has none."
+        ),
+        range_sigma_m: float = typer.Option(
+            100.0, "--range-sigma-m", help="Range sigma (m) where the input has none."
+        ),
+        rep_out: Path | None = typer.Option(
+            None, "--rep-out", help="Write the solutions as Debrief REP tracks (REP input)."
+        ),
     ) -> None:
         """Bearings-only TMA (DE 3446658): position, course and speed of every contact with
         1-sigma / 95 % values, support values, multi-leg targets and an observability check."""
         from seatrack.io.atomic import atomic_write
         from seatrack.io.atomic import check_output_path
-        from seatrack.io.tma import read_bearings
+        from seatrack.io.rep import read_tma_files
+        from seatrack.io.rep import rep_track_text
+        from seatrack.io.tma import MeasurementDefaults
+        from seatrack.io.tma import apply_base_frequencies
+        from seatrack.io.tma import parse_tonal_values
         from seatrack.io.tma import read_support
         from seatrack.io.tma import result_json
         from seatrack.io.tma import solution_summary
@@ -107,18 +149,38 @@ def register(app: typer.Typer) -> None:
             raise InputError(
                 f"--sigma-deg must be a number of degrees in (0, 180), got {sigma_deg}"
             )
-        if out is not None and plot is not None and out.resolve() == plot.resolve():
-            raise InputError(f"--out and --plot name the same file {out}")
-        for path in (out, plot):
-            if path is not None:
-                check_output_path(path)  # before any work
+        for name, v, lo, hi in (("--sound-speed", sound_speed, 100.0, 10_000.0),
+                                ("--atb-sigma-deg", atb_sigma_deg, 0.0, 180.0),
+                                ("--range-sigma-m", range_sigma_m, 0.0, 1e8)):  # fmt: skip
+            if not (math.isfinite(v) and lo < v < hi):
+                raise InputError(f"{name} must be in ({lo:g}, {hi:g}), got {v}")
+        named = [(n, p) for n, p in (("--out", out), ("--plot", plot), ("--rep-out", rep_out))
+                 if p is not None]  # fmt: skip
+        for i, (n1, p1) in enumerate(named):
+            for n2, p2 in named[i + 1 :]:
+                if p1.resolve() == p2.resolve():
+                    raise InputError(f"{n1} and {n2} name the same file {p1}")
+        for _, path in named:
+            check_output_path(path)  # before any work
         sigma = math.radians(sigma_deg)
-        contacts = read_bearings(bearings, default_sigma=sigma)
-        sup = read_support(support) if support is not None else {}
+        fdefault, fsig = parse_tonal_values(frequency_sigma, "--frequency-sigma", "Hz", True)
+        _, base = parse_tonal_values(base_frequency, "--base-frequency", "Hz")
+        defaults = MeasurementDefaults(
+            sigma, 0.1 if fdefault is None else fdefault, fsig, math.radians(atb_sigma_deg),
+            range_sigma_m,
+        )  # fmt: skip
+        data, frame = read_tma_files(bearings, defaults)
+        if rep_out is not None and frame is None:
+            raise InputError("--rep-out needs REP input (the solution needs a geographic frame)")
+        contacts = apply_base_frequencies(data.contacts, base)
+        sup = {k: list(v) for k, v in data.support.items()}
+        for cid, values in (read_support(support) if support is not None else {}).items():
+            sup.setdefault(cid, []).extend(values)
         unknown = sorted(set(sup) - set(contacts))
         if unknown:
             raise InputError(
-                f"{support}: support values for contact(s) {', '.join(unknown)} not in {bearings}"
+                f"{support}: support values for contact(s) {', '.join(unknown)} not in "
+                f"{bearings[0]}"
             )
         times = _parse_times(manoeuvres)
         if times is not None:
@@ -126,7 +188,8 @@ def register(app: typer.Typer) -> None:
         man: list[float] | str | None = (
             times if times is not None else (None if no_detect else "auto")
         )
-        sols = solve_many(contacts, sup, man, sigma=sigma, config=TMAConfig(sigma=sigma))
+        cfg = TMAConfig(sigma=sigma, sound_speed=sound_speed)
+        sols = solve_many(contacts, sup, man, sigma=sigma, config=cfg)
         text = result_json(sols)
         if out is not None:
             with atomic_write(out) as fh:
@@ -138,6 +201,14 @@ def register(app: typer.Typer) -> None:
             typer.echo(f"wrote {out}")
         else:
             typer.echo(text, nl=False)
+        if rep_out is not None and frame is not None:
+            text_rep = "".join(
+                rep_track_text(s, frame, _times(contacts[cid]), f"TMA_{cid}")
+                for cid, s in sols.items()
+            )
+            with atomic_write(rep_out) as fh:
+                fh.write(text_rep)
+            typer.echo(f"wrote {rep_out}")
         if plot is not None:
             from seatrack.report.tma import plot_solutions
 

@@ -56,6 +56,7 @@ from seatrack.io.table import InputError
 from seatrack.io.table import check_input_file
 from seatrack.io.tma import MeasurementDefaults
 from seatrack.io.tma import TMAInput
+from seatrack.io.tma import read_tma_input
 from seatrack.tma.measurements import Frequencies
 from seatrack.tma.problem import Bearings
 from seatrack.tma.result import TMASolution
@@ -65,6 +66,8 @@ FloatArray = NDArray[np.float64]
 
 __all__ = [
     "YARD_M",
+    "is_rep",
+    "read_tma_files",
     "RepCut",
     "RepData",
     "RepFrame",
@@ -174,11 +177,13 @@ def _time(date: str, clock: str, where: str) -> float:
 def _position(tok: list[str], i: int, where: str) -> tuple[float, float, int]:
     """Latitude, longitude (deg) from ``DD MM SS.SS H DDD MM SS.SS H`` at ``tok[i]``; the
     index after it. Accepts the hemisphere joined to the longitude degrees (``N000``)."""
+    end = i + 8
     try:
         d, m, s, h = tok[i : i + 4]
         if len(h) > 1 and h[0] in "NSns":  # "N000": hemisphere and longitude degrees joined
             tok = tok[: i + 3] + [h[0], h[1:]] + tok[i + 4 :]
             h = h[0]
+            end = i + 7  # one token fewer in the caller's list
         ld, lm, ls, lh = tok[i + 4 : i + 8]
         lat = float(d) + float(m) / 60 + float(s) / 3600
         lon = float(ld) + float(lm) / 60 + float(ls) / 3600
@@ -189,7 +194,7 @@ def _position(tok: list[str], i: int, where: str) -> tuple[float, float, int]:
     if h.upper() not in "NS" or lh.upper() not in "EW" or lat > 90 or lon > 180:
         raise InputError(f"{where}: position {' '.join(tok[i : i + 8])} is not a valid latitude "
                          "and longitude")  # fmt: skip
-    return (-lat if h.upper() == "S" else lat), (-lon if lh.upper() == "W" else lon), i + 8
+    return (-lat if h.upper() == "S" else lat), (-lon if lh.upper() == "W" else lon), end
 
 
 def _name(tok: str) -> str:
@@ -447,3 +452,27 @@ def rep_track_text(
             f"{float(bearing_rad_to_deg(course[k])):.2f} {float(speed[k]):.2f} 0.00"
         )
     return "\n".join(lines) + "\n"
+
+
+def is_rep(path: str | Path) -> bool:
+    """Whether a path names a REP file (extension ``.rep``, any case)."""
+    return Path(path).suffix.lower() == ".rep"
+
+
+def read_tma_files(
+    paths: Sequence[str | Path], defaults: MeasurementDefaults | None = None
+) -> tuple[TMAInput, RepFrame | None]:
+    """The input of ``seatrack tma``: one BEARINGS.csv (:func:`seatrack.io.tma.read_tma_input`)
+    or one or several REP files (:func:`read_rep`, :func:`rep_tma_input`); the local frame
+    of REP input (None for CSV)."""
+    if not paths:
+        raise InputError("no input file given")
+    reps = [is_rep(p) for p in paths]
+    if any(reps):
+        if not all(reps):
+            bad = next(p for p, r in zip(paths, reps, strict=True) if not r)
+            raise InputError(f"{bad}: mix of REP and CSV input; give REP files only (or one CSV)")
+        return rep_tma_input(read_rep(paths), defaults)
+    if len(paths) > 1:
+        raise InputError(f"{paths[1]}: one BEARINGS.csv at a time (several files: REP only)")
+    return read_tma_input(paths[0], defaults), None

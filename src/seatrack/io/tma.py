@@ -39,8 +39,10 @@ import csv
 import json
 import math
 from collections.abc import Mapping
+from collections.abc import Sequence
 from dataclasses import dataclass
 from dataclasses import field
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -68,6 +70,8 @@ __all__ = [
     "LIMITS",
     "MeasurementDefaults",
     "TMAInput",
+    "apply_base_frequencies",
+    "parse_tonal_values",
     "read_bearings",
     "read_tma_input",
     "read_support",
@@ -375,6 +379,68 @@ def read_tma_input(path: str | Path, defaults: MeasurementDefaults | None = None
         if ranges:
             support[c] = ranges
     return TMAInput(contacts, support)
+
+
+def parse_tonal_values(
+    items: Sequence[str], option: str, unit: str, allow_default: bool = False
+) -> tuple[float | None, dict[str, float]]:
+    """Parse ``TONAL=VALUE`` options (``VALUE`` alone for every tonal when
+    ``allow_default``): the value for every tonal (or None) and the values per tonal.
+
+    Raises
+    ------
+    InputError
+        A malformed item, a value that is not a finite positive number, a tonal given twice.
+    """
+    default: float | None = None
+    out: dict[str, float] = {}
+    for item in items:
+        tonal, sep, text = item.rpartition("=")
+        tonal = tonal.strip()
+        if not sep and not allow_default:
+            raise InputError(f"{option}: {item!r} is not TONAL={unit.upper()}")
+        try:
+            v = float(text)
+        except ValueError:
+            raise InputError(f"{option}: {text.strip()!r} is not a number of {unit}") from None
+        if not (math.isfinite(v) and v > 0):
+            raise InputError(f"{option}: {item!r} must be a positive number of {unit}")
+        if not sep:
+            default = v
+        elif not tonal or tonal in out:
+            raise InputError(f"{option}: {item!r} names no tonal or a tonal given twice")
+        else:
+            out[tonal] = v
+    return default, out
+
+
+def apply_base_frequencies(
+    contacts: Mapping[str, Bearings], base: Mapping[str, float]
+) -> dict[str, Bearings]:
+    """Contacts with the given base frequencies (Hz, by tonal id) fixed.
+
+    Raises
+    ------
+    InputError
+        A tonal that no contact's frequencies name.
+    """
+    known = {
+        k for b in contacts.values() if b.frequencies is not None for k in b.frequencies.tonals
+    }
+    unknown = sorted(set(base) - known)
+    if unknown:
+        raise InputError(
+            f"--base-frequency: tonal(s) {', '.join(unknown)} not in the input "
+            f"(tonals: {', '.join(sorted(known)) or 'none'})"
+        )
+    out = {}
+    for cid, b in contacts.items():
+        fr = b.frequencies
+        if fr is not None:
+            mine = {k: v for k, v in base.items() if k in fr.tonals}
+            fr = replace(fr, base_frequency={**fr.base_frequency, **mine})
+        out[cid] = replace(b, frequencies=fr)
+    return out
 
 
 def _support_value(

@@ -124,7 +124,7 @@ def register(app: typer.Typer) -> None:
             sc, names, n, s, sensor=sens.name, processes=processes, progress=progress
         )
         dims = 3 if "elevation" in sens.components else 2
-        crb = position_crb(sc, sens.name)
+        crb = position_crb(sc, sens.name, names)
         rows = summarize(res, names, dims=dims, skip=skip, crb=crb)
         title = f"{sc.name}: {n} runs, seed {s}, sensor {sens.name}, {len(sc.targets)} target(s)"
         print_summary(rows, title, n, res.elapsed_s, errors, crb, skip)

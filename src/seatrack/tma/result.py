@@ -359,7 +359,7 @@ def _leg_estimates(
         t = float(bearings.t[i])
         vals, G = operator_values(beta, starts, t, bearings.observer[i])
         cov6 = G @ P @ G.T if P is not None else np.full((6, 6), np.nan)
-        sb = float(np.sqrt(cov6[3, 3])) if P is not None else math.nan
+        sb = float(np.sqrt(max(cov6[3, 3], 0.0))) if P is not None else math.nan
         out.append(_last_estimate(vals, cov6, valid, sb, t, conf))
     return tuple(out)
 

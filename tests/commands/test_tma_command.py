@@ -278,6 +278,6 @@ def test_cli_frequency_options_validated(tmp_path, monkeypatch, capsys):
     code, _, err = _main(monkeypatch, capsys, b, "--base-frequency", "x=100")
     assert code == 2 and "tonal(s) x not in the input" in err
     code, _, err = _main(monkeypatch, capsys, b, "--sound-speed", "0")
-    assert code == 2 and "--sound-speed must be in" in err
+    assert code == 2 and "--sound-speed must be a number of m/s in" in err
     code, _, err = _main(monkeypatch, capsys, b, DEBRIEF + "Freq_BlueTrack.rep")
     assert code == 2 and "mix of REP and CSV input" in err

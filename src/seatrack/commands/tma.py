@@ -63,13 +63,17 @@ def _check_manoeuvres(times: list[float], contacts: Mapping[str, Bearings]) -> N
             )
 
 
-def _times(b: Bearings) -> list[float]:
-    """Every measurement time of a contact (s)."""
-    out = b.t.tolist()
-    for extra in (b.frequencies, b.bow_angles):
-        if extra is not None:
-            out += extra.t.tolist()
-    return out
+def _check_outputs(named: Mapping[str, Path | None]) -> None:
+    """Output paths differ from each other and are writable (checked before any work)."""
+    from seatrack.io.atomic import check_output_path
+
+    given = [(n, p) for n, p in named.items() if p is not None]
+    for i, (n1, p1) in enumerate(given):
+        for n2, p2 in given[i + 1 :]:
+            if p1.resolve() == p2.resolve():
+                raise InputError(f"{n1} and {n2} name the same file {p1}")
+    for _, path in given:
+        check_output_path(path)
 
 
 def register(app: typer.Typer) -> None:
@@ -111,15 +115,14 @@ def register(app: typer.Typer) -> None:
         base_frequency: list[str] = typer.Option(
             [],
             "--base-frequency",
-            help="Known base frequency TONAL=HZ (repeatable); "
-            "tonals not given have theirs estimated.",
-        ),
+            help="Known base frequency TONAL=HZ (repeatable); the others are estimated.",
+        ),  # fmt: skip
         frequency_sigma: list[str] = typer.Option(
             [],
             "--frequency-sigma",
-            help="Frequency sigma HZ (every tonal) or TONAL=HZ "
-            "(repeatable) where the input has none; default 0.1 Hz.",
-        ),
+            help="Frequency "
+            "sigma HZ or TONAL=HZ (repeatable) where the input has none; default 0.1 Hz.",
+        ),  # fmt: skip
         atb_sigma_deg: float = typer.Option(
             10.0, "--atb-sigma-deg", help="ATB sigma (deg) where the file has none."
         ),
@@ -133,11 +136,10 @@ def register(app: typer.Typer) -> None:
         """Bearings-only TMA (DE 3446658): position, course and speed of every contact with
         1-sigma / 95 % values, support values, multi-leg targets and an observability check."""
         from seatrack.io.atomic import atomic_write
-        from seatrack.io.atomic import check_output_path
         from seatrack.io.rep import read_tma_files
-        from seatrack.io.rep import rep_track_text
-        from seatrack.io.tma import MeasurementDefaults
+        from seatrack.io.rep import rep_solutions_text
         from seatrack.io.tma import apply_base_frequencies
+        from seatrack.io.tma import measurement_defaults
         from seatrack.io.tma import parse_tonal_values
         from seatrack.io.tma import read_support
         from seatrack.io.tma import result_json
@@ -145,30 +147,13 @@ def register(app: typer.Typer) -> None:
         from seatrack.tma import TMAConfig
         from seatrack.tma import solve_many
 
-        if not (math.isfinite(sigma_deg) and 0 < sigma_deg < 180):
-            raise InputError(
-                f"--sigma-deg must be a number of degrees in (0, 180), got {sigma_deg}"
-            )
-        for name, v, lo, hi in (("--sound-speed", sound_speed, 100.0, 10_000.0),
-                                ("--atb-sigma-deg", atb_sigma_deg, 0.0, 180.0),
-                                ("--range-sigma-m", range_sigma_m, 0.0, 1e8)):  # fmt: skip
-            if not (math.isfinite(v) and lo < v < hi):
-                raise InputError(f"{name} must be in ({lo:g}, {hi:g}), got {v}")
-        named = [(n, p) for n, p in (("--out", out), ("--plot", plot), ("--rep-out", rep_out))
-                 if p is not None]  # fmt: skip
-        for i, (n1, p1) in enumerate(named):
-            for n2, p2 in named[i + 1 :]:
-                if p1.resolve() == p2.resolve():
-                    raise InputError(f"{n1} and {n2} name the same file {p1}")
-        for _, path in named:
-            check_output_path(path)  # before any work
-        sigma = math.radians(sigma_deg)
-        fdefault, fsig = parse_tonal_values(frequency_sigma, "--frequency-sigma", "Hz", True)
+        named = {"--out": out, "--plot": plot, "--rep-out": rep_out}
+        _check_outputs(named)  # before any work
+        defaults = measurement_defaults(
+            sigma_deg, frequency_sigma, atb_sigma_deg, range_sigma_m, sound_speed
+        )
+        sigma = defaults.bearing
         _, base = parse_tonal_values(base_frequency, "--base-frequency", "Hz")
-        defaults = MeasurementDefaults(
-            sigma, 0.1 if fdefault is None else fdefault, fsig, math.radians(atb_sigma_deg),
-            range_sigma_m,
-        )  # fmt: skip
         data, frame = read_tma_files(bearings, defaults)
         if rep_out is not None and frame is None:
             raise InputError("--rep-out needs REP input (the solution needs a geographic frame)")
@@ -188,7 +173,7 @@ def register(app: typer.Typer) -> None:
         man: list[float] | str | None = (
             times if times is not None else (None if no_detect else "auto")
         )
-        cfg = TMAConfig(sigma=sigma, sound_speed=sound_speed)
+        cfg = TMAConfig(sigma=sigma, sound_speed=sound_speed)  # checked by measurement_defaults
         sols = solve_many(contacts, sup, man, sigma=sigma, config=cfg)
         text = result_json(sols)
         if out is not None:
@@ -202,12 +187,8 @@ def register(app: typer.Typer) -> None:
         else:
             typer.echo(text, nl=False)
         if rep_out is not None and frame is not None:
-            text_rep = "".join(
-                rep_track_text(s, frame, _times(contacts[cid]), f"TMA_{cid}")
-                for cid, s in sols.items()
-            )
             with atomic_write(rep_out) as fh:
-                fh.write(text_rep)
+                fh.write(rep_solutions_text(sols, contacts, frame))
             typer.echo(f"wrote {rep_out}")
         if plot is not None:
             from seatrack.report.tma import plot_solutions

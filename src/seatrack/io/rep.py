@@ -34,6 +34,7 @@ from __future__ import annotations
 
 import math
 import re
+from collections.abc import Mapping
 from collections.abc import Sequence
 from dataclasses import dataclass
 from dataclasses import field
@@ -73,6 +74,7 @@ __all__ = [
     "RepFrame",
     "RepTrack",
     "read_rep",
+    "rep_solutions_text",
     "rep_tma_input",
     "rep_track_text",
 ]
@@ -476,3 +478,16 @@ def read_tma_files(
     if len(paths) > 1:
         raise InputError(f"{paths[1]}: one BEARINGS.csv at a time (several files: REP only)")
     return read_tma_input(paths[0], defaults), None
+
+
+def rep_solutions_text(
+    solutions: Mapping[str, TMASolution], contacts: Mapping[str, Bearings], frame: RepFrame
+) -> str:
+    """REP tracks ``TMA_<contact>`` of every solution (:func:`rep_track_text`) at every
+    measurement time of its contact (bearings, frequencies, ATB)."""
+    parts = []
+    for cid, sol in solutions.items():
+        b = contacts[cid]
+        times = [b.t] + [x.t for x in (b.frequencies, b.bow_angles) if x is not None]
+        parts.append(rep_track_text(sol, frame, np.concatenate(times), f"TMA_{cid}"))
+    return "".join(parts)

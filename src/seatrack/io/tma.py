@@ -71,6 +71,7 @@ __all__ = [
     "MeasurementDefaults",
     "TMAInput",
     "apply_base_frequencies",
+    "measurement_defaults",
     "parse_tonal_values",
     "read_bearings",
     "read_tma_input",
@@ -412,6 +413,36 @@ def parse_tonal_values(
         else:
             out[tonal] = v
     return default, out
+
+
+def measurement_defaults(
+    sigma_deg: float,
+    frequency_sigma: Sequence[str],
+    atb_sigma_deg: float,
+    range_sigma_m: float,
+    sound_speed: float = 1500.0,
+) -> MeasurementDefaults:
+    """The sigmas of ``seatrack tma`` options, validated (degrees, Hz, metres in; SI and
+    radians out). ``frequency_sigma`` holds ``HZ`` (every tonal) and ``TONAL=HZ`` items
+    (default 0.1 Hz); ``sound_speed`` (m/s) is only checked.
+
+    Raises
+    ------
+    InputError
+        A value out of range, naming its option.
+    """
+    checks = (("--sigma-deg", sigma_deg, "degrees", 0.0, 180.0),
+              ("--sound-speed", sound_speed, "m/s", 100.0, 10_000.0),
+              ("--atb-sigma-deg", atb_sigma_deg, "degrees", 0.0, 180.0),
+              ("--range-sigma-m", range_sigma_m, "metres", 0.0, 1e8))  # fmt: skip
+    for name, v, unit, lo, hi in checks:
+        if not (math.isfinite(v) and lo < v < hi):
+            raise InputError(f"{name} must be a number of {unit} in ({lo:g}, {hi:g}), got {v}")
+    fdefault, fsig = parse_tonal_values(frequency_sigma, "--frequency-sigma", "Hz", True)
+    return MeasurementDefaults(
+        math.radians(sigma_deg), 0.1 if fdefault is None else fdefault, fsig,
+        math.radians(atb_sigma_deg), float(range_sigma_m),
+    )  # fmt: skip
 
 
 def apply_base_frequencies(

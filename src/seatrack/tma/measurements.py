@@ -148,7 +148,8 @@ class Frequencies:
     def tonals(self) -> list[str]:
         """Tonal ids in order of first appearance."""
         assert self.tonal is not None
-        return list(dict.fromkeys(self.tonal.tolist()))
+        _, first = np.unique(self.tonal, return_index=True)
+        return [str(x) for x in self.tonal[np.sort(first)]]
 
     def subset(self, index: NDArray[np.int64]) -> Frequencies:
         """The rows ``index`` (same tonals' base frequencies)."""
@@ -226,14 +227,16 @@ def doppler_ratio(
     vt = np.asarray(v_tgt, dtype=float)
     R = np.hypot(dd[..., 0], dd[..., 1])
     R = np.where(R > 0, R, 1.0)
-    u = dd / R[..., None]
-    a = c + np.sum(vo * u, axis=-1)
-    b = c + np.sum(vt * u, axis=-1)
+    ux, uy = dd[..., 0] / R, dd[..., 1] / R
+    a = c + vo[..., 0] * ux + vo[..., 1] * uy
+    b = c + vt[..., 0] * ux + vt[..., 1] * uy
     g = a / b
-    w = vo - g[..., None] * vt
-    wu = np.sum(w * u, axis=-1)
-    dg_dp = (w - wu[..., None] * u) / (R * b)[..., None]
-    dg_dv = -(g / b)[..., None] * u
+    wx, wy = vo[..., 0] - g * vt[..., 0], vo[..., 1] - g * vt[..., 1]
+    wu = wx * ux + wy * uy
+    Rb = R * b
+    dg_dp = np.stack([(wx - wu * ux) / Rb, (wy - wu * uy) / Rb], axis=-1)
+    gb = -g / b
+    dg_dv = np.stack([gb * ux, gb * uy], axis=-1)
     return g, dg_dp, dg_dv
 
 
@@ -252,8 +255,10 @@ def _positions(B: FloatArray, C: FloatArray, E: FloatArray) -> tuple[FloatArray,
 
 def _columns(C: FloatArray, E: FloatArray, gp: FloatArray, gv: FloatArray) -> FloatArray:
     """Jacobian rows ``(..., N, 2(1 + L))`` of ``f(p_i, v_i)`` from ``df/dp``, ``df/dv``."""
-    J = C[..., :, None] * gp[..., None, :] + E[..., :, None] * gv[..., None, :]
-    return np.asarray(J.reshape(C.shape[:-1] + (2 * C.shape[-1],)), dtype=float)
+    J = np.empty(C.shape[:-1] + (2 * C.shape[-1],))
+    for k in range(2):  # East, North columns
+        J[..., k::2] = C * gp[..., k : k + 1] + E * gv[..., k : k + 1]
+    return J
 
 
 def frequency_residuals(

@@ -211,3 +211,30 @@ def test_radial_course_gives_no_doppler_change_and_stays_unobservable():
     assert not sol.determined["range"] and not sol.determined["f0:1"]
     assert sol.determined["bearing"]
     assert math.isnan(sol.last.range)
+
+
+def test_solve_many_pads_frequency_rows_and_tonals():
+    """Contacts with two tonals, one tonal and none in one batch: each solution equals the
+    contact solved alone."""
+    from seatrack.tma import solve_many
+
+    sc = _steady([8000, 6000], 250.0, 6.0)
+    r = np.random.default_rng(3)
+    b = sc.bearings(r)
+    f1, f2 = sc.frequencies(r, 300.0, 0.05, tonal="a"), sc.frequencies(r, 120.0, 0.05, tonal="b")
+    two = Frequencies(
+        np.r_[f1.t, f2.t[::2]], np.r_[f1.frequency, f2.frequency[::2]],
+        np.r_[f1.observer, f2.observer[::2]],
+        np.r_[f1.observer_velocity, f2.observer_velocity[::2]],
+        np.r_[f1.sigma, f2.sigma[::2]], np.r_[f1.tonal, f2.tonal[::2]], {"b": 120.0},
+    )  # fmt: skip
+    contacts = {"two": replace(b, frequencies=two), "one": replace(b, frequencies=f1), "none": b}
+    many = solve_many(contacts, manoeuvres=None)
+    for cid, bb in contacts.items():
+        alone = solve(bb, manoeuvres=None)
+        assert np.allclose(many[cid].state, alone.state, rtol=1e-9, atol=1e-6)
+        assert np.allclose(many[cid].base_frequency, alone.base_frequency)
+    assert many["two"].tonals == ("a", "b")
+    assert many["two"].base_frequency_fixed.tolist() == [False, True]
+    assert many["two"].base_frequency[1] == 120.0 and many["two"].sigma_base_frequency[1] == 0
+    assert "f0:b" not in many["two"].determined

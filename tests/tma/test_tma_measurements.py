@@ -238,3 +238,26 @@ def test_solve_many_pads_frequency_rows_and_tonals():
     assert many["two"].base_frequency_fixed.tolist() == [False, True]
     assert many["two"].base_frequency[1] == 120.0 and many["two"].sigma_base_frequency[1] == 0
     assert "f0:b" not in many["two"].determined
+
+
+def test_crb_of_a_mix_with_the_base_frequency_as_nuisance():
+    from seatrack.information import SingularMatrixError
+    from seatrack.tma import crb
+    from seatrack.tma import position_crb
+
+    sc = _steady([8000, 6000], 250.0, 6.0)
+    fr = sc.frequencies(np.random.default_rng(0), 300.0, 0.05)
+    obs = sc.observer.pos[:, :2]
+    with pytest.raises(SingularMatrixError):  # bearings only, steady own ship
+        crb(sc.state, sc.times, obs, sc.sigma)
+    P = crb(sc.state, sc.times, obs, sc.sigma, frequencies=fr, base_frequency={"1": 300.0})
+    assert P.shape == (5, 5) and np.all(np.linalg.eigvalsh(P) > 0)
+    # a known f0 gives more information: a smaller state bound
+    known = replace(fr, base_frequency={"1": 300.0})
+    Pk = crb(sc.state, sc.times, obs, sc.sigma, frequencies=known, base_frequency={"1": 300.0})
+    assert Pk.shape == (4, 4)
+    assert np.trace(position_crb(Pk, sc.starts, 1800.0)) < np.trace(
+        position_crb(P, sc.starts, 1800.0)
+    )
+    with pytest.raises(ValueError, match="true f0 of tonal"):
+        crb(sc.state, sc.times, obs, sc.sigma, frequencies=fr)

@@ -120,10 +120,11 @@ class RepCut:
 
 @dataclass(frozen=True)
 class RepData:
-    """Tracks by name and sensor cuts, in file order."""
+    """Tracks by name and sensor cuts, in file order, and the files read."""
 
     tracks: dict[str, RepTrack]
     cuts: list[RepCut]
+    files: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -187,8 +188,14 @@ def _position(tok: list[str], i: int, where: str) -> tuple[float, float, int]:
             h = h[0]
             end = i + 7  # one token fewer in the caller's list
         ld, lm, ls, lh = tok[i + 4 : i + 8]
-        lat = float(d) + float(m) / 60 + float(s) / 3600
-        lon = float(ld) + float(lm) / 60 + float(ls) / 3600
+        parts = [float(x) for x in (d, m, s, ld, lm, ls)]
+        if (
+            not all(math.isfinite(x) and x >= 0 for x in parts)
+            or max(parts[1], parts[2], parts[4], parts[5]) >= 60
+        ):
+            raise ValueError(tok[i])  # fmt: skip
+        lat = parts[0] + parts[1] / 60 + parts[2] / 3600
+        lon = parts[3] + parts[4] / 60 + parts[5] / 3600
     except (ValueError, IndexError):
         raise InputError(
             f"{where}: position is not DD MM SS.SS H DDD MM SS.SS H (or NULL)"
@@ -277,8 +284,10 @@ def read_rep(paths: Sequence[str | Path]) -> RepData:
     """
     tracks: dict[str, RepTrack] = {}
     cuts: list[RepCut] = []
+    files = []
     for path in paths:
         p = check_input_file(path, "a REP file")
+        files.append(str(p))
         try:
             text = p.read_text(encoding="utf-8", errors="replace")
         except OSError as exc:
@@ -295,7 +304,7 @@ def read_rep(paths: Sequence[str | Path]) -> RepData:
                     cuts.append(_sensor(kind, tok, where))
                 continue  # other annotation lines (;TEXT:, ;LINE:, ...) are not used
             _fix(tok, where, tracks)
-    return RepData(tracks, cuts)
+    return RepData(tracks, cuts, tuple(files))
 
 
 def _frame(data: RepData, hosts: Sequence[str]) -> RepFrame:
@@ -341,7 +350,8 @@ def rep_tma_input(
     """
     d = defaults or MeasurementDefaults()
     if not data.cuts:
-        raise InputError("no ;SENSOR:, ;SENSOR2: or ;SENSOR3: lines in the REP file(s)")
+        where = ", ".join(data.files) or "REP input"
+        raise InputError(f"{where}: no ;SENSOR:, ;SENSOR2: or ;SENSOR3: lines")
     hosts = list(dict.fromkeys(c.host for c in data.cuts))
     for h in hosts:
         if h not in data.tracks:

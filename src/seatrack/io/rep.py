@@ -350,8 +350,8 @@ def rep_tma_input(
     """
     d = defaults or MeasurementDefaults()
     if not data.cuts:
-        where = ", ".join(data.files) or "REP input"
-        raise InputError(f"{where}: no ;SENSOR:, ;SENSOR2: or ;SENSOR3: lines")
+        names = ", ".join(data.files) or "REP input"
+        raise InputError(f"{names}: no ;SENSOR:, ;SENSOR2: or ;SENSOR3: lines")
     hosts = list(dict.fromkeys(c.host for c in data.cuts))
     for h in hosts:
         if h not in data.tracks:

@@ -724,4 +724,14 @@ def solution_summary(cid: str, s: TMASolution) -> str:
         f"bearing {math.degrees(L.bearing):.1f} deg, "
         f"course {math.degrees(L.course):.1f} +/- {math.degrees(L.sigma_course):.1f} deg, "
         f"speed {L.speed:.2f} +/- {L.sigma_speed:.2f} m/s ({s.iterations} iterations)"
+        + "".join(
+            f", f0 {k} {f:.3f} +/- {sf:.3f} Hz" + (" (given)" if fixed else "")
+            for k, f, sf, fixed in zip(
+                s.tonals,
+                s.base_frequency,
+                s.sigma_base_frequency,
+                s.base_frequency_fixed,
+                strict=True,
+            )
+        )
     )

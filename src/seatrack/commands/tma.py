@@ -133,8 +133,9 @@ def register(app: typer.Typer) -> None:
             None, "--rep-out", help="Write the solutions as Debrief REP tracks (REP input)."
         ),
     ) -> None:
-        """Bearings-only TMA (DE 3446658): position, course and speed of every contact with
-        1-sigma / 95 % values, support values, multi-leg targets and an observability check."""
+        """TMA (DE 3446658) from bearings and, when given, tonal frequencies, ATB and ranges:
+        position, course, speed (and base frequencies) of every contact with 1-sigma / 95 %
+        values, support values, multi-leg targets and an observability check."""
         from seatrack.io.atomic import atomic_write
         from seatrack.io.rep import read_tma_files
         from seatrack.io.rep import rep_solutions_text

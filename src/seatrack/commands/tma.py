@@ -133,9 +133,8 @@ def register(app: typer.Typer) -> None:
             None, "--rep-out", help="Write the solutions as Debrief REP tracks (REP input)."
         ),
     ) -> None:
-        """TMA (DE 3446658) from bearings and, when given, tonal frequencies, ATB and ranges:
-        position, course, speed (and base frequencies) of every contact with 1-sigma / 95 %
-        values, support values, multi-leg targets and an observability check."""
+        """TMA (DE 3446658) from bearings, tonal frequencies, ATB and ranges: position, course,
+        speed and base frequencies of every contact with 1-sigma / 95 % values."""
         from seatrack.io.atomic import atomic_write
         from seatrack.io.rep import read_tma_files
         from seatrack.io.rep import rep_solutions_text

@@ -1,6 +1,7 @@
 """Bearings-only TMA benchmark: accuracy vs FilterPy / Stone Soup EKFs, speed vs SciPy.
 
-Run: ``python benchmarks/tma.py [--quick] [--runs N]``. Prints one table.
+Run: ``python benchmarks/tma.py [--quick] [--runs N] [--section all|bearings|frequency]``.
+Prints one table per section.
 
 Accuracy -- the classic scenario of Ristic, Arulampalam & Gordon (ch. 6; see
 :func:`seatrack.simulate.tma.classic_scenario`), the same seeded bearings for every method; final
@@ -25,6 +26,23 @@ start, and ``scipy.optimize.least_squares`` (``method="lm"``, analytic Jacobian 
 a loop of SciPy solves from the operator prior. Times are medians of the process CPU
 time over repeats (the machine is shared; wall-clock time depends on the other jobs); the
 minimum is printed in brackets.
+
+Frequency section (:func:`frequency_section`) -- random geometries in four classes: own
+ship on one steady leg or with one turn (40-140 deg), target straight or on two legs (a
+30-90 deg course change at 55-65 % of the time, the leg time given to the solver); 60
+bearings every 30 s (sigma 1 deg), one tonal with the base frequency (100-400 Hz) unknown,
+frequency sigma 0.05 Hz, ATB sigma 10 deg, sound speed 1500 m/s; range 3-25 km, target
+speed 2-10 m/s, own ship 3-8 m/s. Per geometry ``--runs`` noisy realisations are solved
+from the automatic start (one :func:`seatrack.tma.solve_many` call) with bearings only,
+bearings + frequency, and bearings + frequency + ATB. MSE/CRB: the squared final-position
+error of each valid (observable, converged) run divided by the trace of its geometry's
+final-position CRB (the joint bound with the base frequency a nuisance parameter),
+averaged over the runs -- over every geometry whose CRB exists, and over the geometries
+whose CRB range sigma is below 10 % of the range (in the note). "3 sigma" row: steady own
+ship, bearings + frequency, every geometry with CRB range sigma below 10 % of the range --
+the share of runs whose final range error is within 3 CRB sigma. Last row: 1,000 bearings +
+1,000 frequencies of one steady-own-ship
+geometry, automatic start, one leg.
 """
 
 from __future__ import annotations
@@ -41,12 +59,18 @@ from scipy.optimize import least_squares
 from seatrack.evaluate.montecarlo import format_table
 from seatrack.geometry import knots_to_mps
 from seatrack.geometry import wrap_pi
+from seatrack.information import SingularMatrixError
+from seatrack.simulate import Leg
+from seatrack.simulate import trajectory
+from seatrack.simulate.tma import TMAScenario
 from seatrack.simulate.tma import classic_scenario
+from seatrack.simulate.tma import scenario_from_trajectories
 from seatrack.tma import Bearings
 from seatrack.tma import bearing_residuals
 from seatrack.tma import crb
 from seatrack.tma import leg_starts
 from seatrack.tma import leg_time_matrix
+from seatrack.tma import operator_values
 from seatrack.tma import position_crb
 from seatrack.tma import solve
 from seatrack.tma import solve_many
@@ -173,6 +197,143 @@ def timeit(fn, repeats: int) -> tuple[float, float]:
     return float(np.median(ts)), float(np.min(ts))
 
 
+MODES = ("bearings only", "bearings + frequency", "bearings + frequency + ATB")
+SIGMA_HZ = 0.05
+SIGMA_ATB = math.radians(10.0)
+
+
+def random_case(rng: np.random.Generator, manoeuvre: bool, two_leg: bool, n: int = 60,
+                dt: float = 30.0) -> tuple[TMAScenario, float]:  # fmt: skip
+    """One geometry of the frequency section (module docstring) and its base frequency."""
+    T = (n - 1) * dt
+    times = dt * np.arange(n)
+    if manoeuvre:
+        turn = rng.choice([-1, 1]) * rng.uniform(math.radians(40), math.radians(140))
+        legs = [Leg.straight(rng.uniform(0.3, 0.5) * T), Leg.turn(turn, math.radians(2.0)),
+                Leg.straight(2 * T)]  # fmt: skip
+    else:
+        legs = [Leg.straight(2 * T)]
+    obs = trajectory([0, 0], rng.uniform(0, 2 * np.pi), rng.uniform(3, 8), legs, times=times)
+    r0, b0 = rng.uniform(3000, 25000), rng.uniform(0, 2 * np.pi)
+    tlegs, man = [Leg.straight(2 * T)], []
+    if two_leg:
+        t1 = float(times[int(rng.uniform(0.55, 0.65) * n)])
+        change = rng.choice([-1, 1]) * rng.uniform(math.radians(30), math.radians(90))
+        rate = math.radians(30.0)  # a quick turn (<= 3 s) at the leg time
+        tlegs = [Leg.straight(t1), Leg.turn(change, rate), Leg.straight(2 * T)]
+        man = [t1 + 1e-3]
+    tgt = trajectory([r0 * math.sin(b0), r0 * math.cos(b0)], rng.uniform(0, 2 * np.pi),
+                     rng.uniform(2, 10), tlegs, times=times)  # fmt: skip
+    return scenario_from_trajectories(tgt, obs, math.radians(1.0), man), float(
+        rng.uniform(100, 400)
+    )
+
+
+def _case_crb(sc: TMAScenario, f0: float, mode: int) -> np.ndarray | None:
+    """Joint CRB (state, f0) of a mode, or None when singular."""
+    rng = np.random.default_rng(0)  # values are replaced by the noise-free ones
+    kw: dict = {}
+    if mode >= 1:
+        kw = {"frequencies": sc.frequencies(rng, f0, SIGMA_HZ), "base_frequency": {"1": f0}}
+    if mode == 2:
+        kw["bow_angles"] = sc.bow_angles(rng, SIGMA_ATB)
+    try:
+        return crb(sc.state, sc.times, sc.observer.pos, sc.sigma, sc.manoeuvres, **kw)
+    except SingularMatrixError:
+        return None
+
+
+def frequency_section(n_geom: int, n_runs: int, seed: int) -> list[dict]:
+    """Rows of the frequency section (module docstring)."""
+    from dataclasses import replace
+
+    rng = np.random.default_rng(seed)
+    rows: list[dict] = []
+    classes = [(m, tl) for m in (False, True) for tl in (False, True)]
+    stats = {(c, k): {"e2": 0.0, "b": 0.0, "e2s": 0.0, "bs": 0.0, "ok": 0, "n": 0, "it": 0,
+                      "t": 0.0, "g": 0, "gs": 0} for c in classes for k in range(3)}  # fmt: skip
+    shares: list[float] = []
+    for c in classes:
+        for _ in range(n_geom):
+            sc, f0 = random_case(rng, *c)
+            tl = float(sc.times[-1])
+            truth = sc.target.pos[-1, :2]
+            rng_true = float(np.hypot(*(truth - sc.observer.pos[-1, :2])))
+            data = []
+            for _ in range(n_runs):
+                b = sc.bearings(rng)
+                fr, ab = sc.frequencies(rng, f0, SIGMA_HZ), sc.bow_angles(rng, SIGMA_ATB)
+                data.append((b, replace(b, frequencies=fr), replace(b, frequencies=fr,
+                                                                   bow_angles=ab)))  # fmt: skip
+            for k in range(3):
+                st = stats[(c, k)]
+                P = _case_crb(sc, f0, k)
+                contacts = {str(i): d[k] for i, d in enumerate(data)}
+                t = time.process_time()
+                sols = solve_many(contacts, manoeuvres=list(sc.manoeuvres) or None)
+                st["t"] += time.process_time() - t
+                valid = [s for s in sols.values() if s.valid]
+                st["ok"] += len(valid)
+                st["n"] += n_runs
+                st["it"] += sum(s.iterations for s in sols.values())
+                if P is None:
+                    continue
+                Pp = position_crb(P, sc.starts, tl)
+                _, G = operator_values(sc.state, sc.starts, tl, sc.observer.pos[-1, :2])
+                s_rng = float(np.sqrt(G[2] @ P[: G.shape[1], : G.shape[1]] @ G[2]))
+                e2 = [float(np.sum((s.position_at(np.array([tl]))[0] - truth) ** 2))
+                      for s in valid]  # fmt: skip
+                st["g"] += 1
+                st["e2"] += sum(e2) / float(np.trace(Pp))  # each run's error over its bound
+                st["b"] += len(e2)
+                if s_rng < 0.1 * rng_true:
+                    st["gs"] += 1
+                    st["e2s"] += sum(e2) / float(np.trace(Pp))
+                    st["bs"] += len(e2)
+                    if k == 1 and not c[0]:
+                        inside = [abs(s.last.range - rng_true) < 3 * s_rng if s.valid else False
+                                  for s in sols.values()]  # fmt: skip
+                        shares.append(float(np.mean(inside)))
+    for c in classes:
+        name = (("own ship turns" if c[0] else "own ship steady") + ", "
+                + ("two-leg target" if c[1] else "straight target"))  # fmt: skip
+        for k in range(3):
+            st = stats[(c, k)]
+            ratio = st["e2"] / st["b"] if st["b"] else None
+            ratio_s = st["e2s"] / st["bs"] if st["bs"] else None
+            note = (f"{st['ok'] / st['n']:.0%} valid, {st['it'] / st['n']:.0f} it, "
+                    f"{st['t'] / st['n'] * 1e3:.1f} ms/run; CRB {st['g']}/{n_geom} geometries, "
+                    f"range sigma <10%: {st['gs']} (MSE/CRB "
+                    + (f"{ratio_s:.2f})" if ratio_s is not None else "n/a)"))  # fmt: skip
+            rows.append({"case": name if k == 0 else "", "method": MODES[k], "value": ratio,
+                         "unit": "MSE/CRB", "ratio": None, "note": note})  # fmt: skip
+    good = sum(x >= 0.95 for x in shares)
+    rows.append({"case": "steady own ship, 3 sigma", "method": MODES[1],
+                 "value": min(shares) if shares else None, "unit": "worst share",
+                 "ratio": None, "note": f"{good}/{len(shares)} geometries with >= 95 % of runs "
+                 "within 3 CRB sigma of the final range"})  # fmt: skip
+    # speed: 1,000 bearings + 1,000 frequencies, automatic start
+    times = np.linspace(0.0, 3600.0, 1000)
+    obs = trajectory([0, 0], 0.3, 5.0, [Leg.straight(4000.0)], times=times)
+    tgt = trajectory([9000, 7000], 4.2, 6.0, [Leg.straight(4000.0)], times=times)
+    sc = scenario_from_trajectories(tgt, obs, math.radians(1.0))
+    r = np.random.default_rng(seed + 1)
+    b = replace(sc.bearings(r), frequencies=sc.frequencies(r, 300.0, SIGMA_HZ))
+    sol = solve(b)
+    m = timeit(lambda: solve(b), 20)
+    rows.append(
+        {
+            "case": "1,000 bearings + 1,000 freq.",
+            "method": "seatrack, automatic start",
+            "value": m[0] * 1e3,
+            "unit": "ms",
+            "ratio": None,
+            "note": f"(min {m[1] * 1e3:.2f}) {sol.iterations} it, valid {sol.valid}",
+        }
+    )
+    return rows
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="few runs and repeats (smoke test)")
@@ -180,7 +341,23 @@ def main() -> None:
         "--runs", type=int, default=None, help="Monte-Carlo runs (default 300; quick 30)"
     )
     ap.add_argument("--seed", type=int, default=2024)
+    ap.add_argument("--section", choices=("all", "bearings", "frequency"), default="all")
+    ap.add_argument(
+        "--geometries",
+        type=int,
+        default=None,
+        help="geometries per class in the frequency section (default 40; quick 6)",
+    )
     args = ap.parse_args()
+    cols = [("case", "case"), ("method", "method"), ("value", "value", ".4g"), ("unit", "unit"),
+            ("ratio", "ratio", ".3g"), ("note", "note")]  # fmt: skip
+    if args.section in ("all", "frequency"):
+        n_geom = args.geometries or (6 if args.quick else 40)
+        runs_f = args.runs or (10 if args.quick else 20)
+        print(f"TMA with frequency and ATB ({n_geom} geometries per class, {runs_f} runs each)")
+        print(format_table(frequency_section(n_geom, runs_f, args.seed), cols))
+    if args.section == "frequency":
+        return
     n_runs = args.runs or (30 if args.quick else 300)
     reps = 3 if args.quick else 20
     rows: list[dict] = []
@@ -263,8 +440,6 @@ def main() -> None:
         "Bearings-only TMA (ratio: accuracy rows vs the CRB; time rows vs the ratio-1 row of the "
         "case; times are CPU ms)"
     )
-    cols = [("case", "case"), ("method", "method"), ("value", "value", ".4g"), ("unit", "unit"),
-            ("ratio", "ratio", ".3g"), ("note", "note")]  # fmt: skip
     print(format_table(rows, cols))
 
 

@@ -101,6 +101,20 @@ def test_tma(tmp_path):
             assert (v is None and math.isnan(getattr(row, k))) or getattr(row, k) == v
 
 
+def test_tma_debrief_rep(tmp_path):
+    """REP input with bearings and frequencies: RESULT.json and the REP solution of the
+    command equal the API's."""
+    data = Path(__file__).parents[1] / "data" / "debrief"
+    reps = [data / "Freq_BlueSensor.rep", data / "Freq_BlueTrack.rep"]
+    out, rep = tmp_path / "result.json", tmp_path / "solution.rep"
+    args = ("--sigma-deg", "0.1", "--out", out, "--rep-out", rep)
+    assert cli("tma", *reps, *args).returncode == 0
+    res = seatrack.tma(reps, sigma_deg=0.1)
+    assert out.read_text() == res.to_json()
+    assert rep.read_text() == res.to_rep()
+    assert any(e["base_frequencies"] for e in res.to_dict().values())
+
+
 def test_ais(tmp_path):
     src = ais_sample("us_boston_201401_trajectools.csv")
     out = tmp_path / "tracks.csv"

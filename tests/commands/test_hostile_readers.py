@@ -89,6 +89,42 @@ def test_scenario_reader(tmp_path_factory, data):
     _read(load_scenario, p)
 
 
+REP = """;; host track and sensor lines (Debrief REP)
+100112 120000 OWN @A 60 00 00.00 N 000 00 00.00 E 90.0 10.0 0.0
+100112 120100 OWN @A 60 00 00.00 N 000 01 00.00 E 90.0 10.0 0.0
+100112 120200 OWN @A 60 00 30.00 N 000 02 00.00 E 45.0 10.0 0.0
+;SENSOR: 100112 120000 OWN @A NULL 45.0 NULL S1 label
+;SENSOR: 100112 120100 OWN @A 60 00 00.00 N 000 01 00.00 E 46.0 2000 S1 label
+;SENSOR2: 100112 120130 OWN @A NULL 47.0 NULL 300.5 NULL TONAL_A label
+;SENSOR3: 100112 120200 OWN @A NULL 48.0 0.5 301.0 0.2 NULL "TONAL B" a label
+"""
+
+
+@settings(max_examples=80, deadline=None)
+@given(data=st.data())
+def test_rep_reader(tmp_path_factory, data):
+    from seatrack.io.rep import read_tma_files
+
+    p = tmp_path_factory.mktemp("rep") / "a.rep"
+    p.write_bytes(data.draw(mutated_text(REP)))
+    _read(lambda q: read_tma_files([q]), p)
+
+
+@settings(max_examples=60, deadline=None)
+@given(data=st.data())
+def test_bearings_reader_with_measurement_columns(tmp_path_factory, data):
+    from seatrack.io.tma import read_tma_input
+
+    text = (
+        "contact,time_s,bearing_deg,observer_x_m,observer_y_m,frequency_hz,tonal,atb_deg,range_m\n"
+        "A,0,10,0,0,300.1,a,,\nA,0,,0,0,120.5,b,,\nA,60,11,60,0,300.2,a,30,\n"
+        "A,120,12,120,0,,,,5000\nA,180,13,180,0,300.3,a,,\n"
+    )
+    p = tmp_path_factory.mktemp("mcsv") / "m.csv"
+    p.write_bytes(data.draw(mutated_csv(text)))
+    _read(read_tma_input, p)
+
+
 @settings(max_examples=80, deadline=None)
 @given(data=st.data())
 def test_nmea_reader(tmp_path_factory, data):

@@ -248,3 +248,36 @@ def test_mutated_support_exit_0_or_2_never_a_traceback(tmp_path, monkeypatch, ca
         json.loads(out, parse_constant=lambda name: pytest.fail(f"{name} in JSON"))
     else:
         assert err.startswith(f"error: {s}") and len(err.strip().splitlines()) == 1
+
+
+DEBRIEF = "tests/data/debrief/"
+
+
+def test_cli_debrief_rep_in_and_out(tmp_path):
+    out, rep = tmp_path / "r.json", tmp_path / "sol.rep"
+    res = CliRunner().invoke(
+        _app(),
+        ["tma", DEBRIEF + "Freq_BlueSensor.rep", DEBRIEF + "Freq_BlueTrack.rep",
+         "--sigma-deg", "0.1", "--manoeuvres", "1263299850,1263303700",
+         "--out", str(out), "--rep-out", str(rep)],
+    )  # fmt: skip
+    assert res.exit_code == 0, res.output
+    d = json.loads(out.read_text())["SENSOR"]
+    assert d["observable"] and d["base_frequencies"][0]["tonal"] == "NB_FREQ"
+    assert abs(d["base_frequencies"][0]["f0_hz"] - 150.0) < 0.05
+    assert [leg["start_s"] for leg in d["leg_estimates"]] == [1263297600, 1263299850, 1263303700]
+    lines = rep.read_text().splitlines()
+    assert lines[1].startswith("100112 120000.000 TMA_SENSOR @C ")
+    assert len(lines) == 1 + 145  # every measurement time (the leg starts are among them)
+
+
+def test_cli_frequency_options_validated(tmp_path, monkeypatch, capsys):
+    b = write_bearings(tmp_path / "b.csv", ("A",))
+    code, _, err = _main(monkeypatch, capsys, b, "--rep-out", tmp_path / "x.rep")
+    assert code == 2 and "--rep-out needs REP input" in err
+    code, _, err = _main(monkeypatch, capsys, b, "--base-frequency", "x=100")
+    assert code == 2 and "tonal(s) x not in the input" in err
+    code, _, err = _main(monkeypatch, capsys, b, "--sound-speed", "0")
+    assert code == 2 and "--sound-speed must be a number of m/s in" in err
+    code, _, err = _main(monkeypatch, capsys, b, DEBRIEF + "Freq_BlueTrack.rep")
+    assert code == 2 and "mix of REP and CSV input" in err

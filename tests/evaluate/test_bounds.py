@@ -225,3 +225,28 @@ def test_singular_prior_and_measurement_noise_are_named_errors():
         pcrb_linear(np.eye(4), F, Q, H, np.array([[1.0, 1.0], [1.0, 1.0]]), n_steps=3)
     b = pcrb_linear(np.diag([1e4, 1e4, 100.0, 100.0]), F, Q, H, R, n_steps=3)
     assert np.all(np.isfinite(b))
+
+
+def test_crb_deterministic_with_prior_is_the_posterior_crb():
+    """With a prior the recursion is the linear PCRB with Q = 0 and P0 = prior^-1; a
+    velocity-only (singular) prior lowers the bound and fixes the first step."""
+    from seatrack.models.measurement import RangeBearing
+
+    K, dt = 10, 2.0
+    X, F, _ = _bearing_truth(K, dt)
+    model = RangeBearing(n=4, pos=(0, 1))
+    R = np.diag([20.0**2, np.radians(0.5) ** 2])
+    H = model.jacobian(X[0])
+    info = np.einsum("kji,jl,klm->kim", H, np.linalg.inv(R), H)
+    P0 = np.diag([500.0**2, 400.0**2, 30.0**2, 20.0**2])
+    got = crb_deterministic(info, F, prior=np.linalg.inv(P0))
+    want = pcrb_linear(P0, F, np.zeros((4, 4)), list(H), [R] * (K + 1), measure_first=True)
+    np.testing.assert_allclose(got, want, rtol=1e-8)
+    vel = np.diag([0.0, 0.0, 1 / 50.0**2, 1 / 50.0**2])
+    with_v = crb_deterministic(info, F, prior=vel)
+    without = crb_deterministic(info, F)
+    assert np.all(np.isfinite(with_v[0])) and np.all(np.isnan(without[0]))
+    assert np.all(np.trace(with_v[1:, :2, :2], axis1=1, axis2=2)
+                  < np.trace(without[1:, :2, :2], axis1=1, axis2=2))  # fmt: skip
+    with pytest.raises(ValueError, match="positive semi-definite"):
+        crb_deterministic(info, F, prior=-vel)

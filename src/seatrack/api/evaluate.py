@@ -149,7 +149,7 @@ def run_evaluation(
     errors = trial_errors(sc, sens, names, s)
     res = compare_methods(sc, names, n, s, sensor=sens.name, processes=processes, progress=progress)
     dims = 3 if "elevation" in sens.components else 2
-    crb = position_crb(sc, sens.name)
+    crb = position_crb(sc, sens.name, names)
     rows = summarize(res, names, dims=dims, skip=skip, crb=crb)
     title = f"{sc.name}: {n} runs, seed {s}, sensor {sens.name}, {len(sc.targets)} target(s)"
     return Evaluation(rows, res, names, errors, crb, sens, dims, n, s, skip, title)

@@ -1,10 +1,12 @@
-"""``seatrack.tma``: bearings-only target motion analysis of every contact, as ``seatrack
-tma``; the result holds the fields of the command's RESULT.json."""
+"""``seatrack.tma``: target motion analysis of every contact from bearings and, when given,
+tonal frequencies, angles on the bow and ranges, as ``seatrack tma``; the result holds the
+fields of the command's RESULT.json."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
+import os
 from collections.abc import Iterator
 from collections.abc import Mapping
 from collections.abc import Sequence
@@ -62,11 +64,14 @@ class TMAResult(Mapping[str, dict[str, Any]]):
     solutions : dict of str to seatrack.tma.TMASolution
         The solver's results (SI units, radians).
     bearings : dict of str to seatrack.tma.Bearings
-        The bearings of each contact as read.
+        The measurements of each contact as read (bearings, frequencies, ATB).
+    frame : seatrack.io.rep.RepFrame or None
+        The geographic frame of REP input (None for a table): what :meth:`to_rep` needs.
     """
 
     solutions: dict[str, Any]
     bearings: dict[str, Any]
+    frame: Any = None
 
     def __getitem__(self, contact: str) -> dict[str, Any]:
         from seatrack.io.tma import solution_to_dict
@@ -84,6 +89,20 @@ class TMAResult(Mapping[str, dict[str, Any]]):
         from seatrack.io.tma import result_json
 
         return result_json(self.solutions)
+
+    def to_rep(self) -> str:
+        """The solutions as Debrief REP tracks ``TMA_<contact>`` (REP input only).
+
+        Raises
+        ------
+        InputError
+            The input was a table, not REP files: the solution has no geographic frame.
+        """
+        from seatrack.io.rep import rep_solutions_text
+
+        if self.frame is None:
+            raise InputError("REP output needs REP input (the solution needs a geographic frame)")
+        return rep_solutions_text(self.solutions, self.bearings, self.frame)
 
     def to_dict(self) -> dict[str, Any]:
         """The RESULT.json object (``NaN`` as ``None``)."""
@@ -128,15 +147,23 @@ def tma(
     support: Source | None = None,
     manoeuvres: Sequence[float] | None = None,
     detect: bool = True,
+    sound_speed_mps: float | None = None,
+    base_frequency_hz: Mapping[str, float] | None = None,
+    frequency_sigma_hz: float | Mapping[str, float] | None = None,
+    atb_sigma_deg: float = 10.0,
+    range_sigma_m: float = 100.0,
 ) -> TMAResult:
-    """Bearings-only target motion analysis of every contact, as ``seatrack tma``.
+    """Target motion analysis of every contact, as ``seatrack tma``: bearings, and tonal
+    frequencies, angles on the bow (ATB) and ranges where the input has them.
 
     Parameters
     ----------
-    bearings : path, pandas.DataFrame, pyarrow.Table or dict of arrays
+    bearings : path, pandas.DataFrame, pyarrow.Table, dict of arrays, or list of paths
         The BEARINGS columns: ``time_s``, ``bearing_deg`` (clockwise from North, [0, 360)),
-        ``observer_x_m``, ``observer_y_m`` (East, North); optional ``contact`` and
-        ``sigma_deg``.
+        ``observer_x_m``, ``observer_y_m`` (East, North); optional ``contact``,
+        ``sigma_deg``, ``frequency_hz``, ``frequency_sigma_hz``, ``tonal``, ``atb_deg``,
+        ``range_m`` (docs/formats.md). Or Debrief REP files (a list of paths: sensor lines
+        and the host's track).
     sigma_deg : float, optional
         Bearing standard deviation (degrees, in (0, 180)) where the table gives none
         (default: the sigma of ``config``, 1 degree).
@@ -150,6 +177,15 @@ def tma(
         changes are detected from the bearing residuals (``detect=False``: one leg).
     detect : bool
         Detect leg changes when ``manoeuvres`` is not given.
+    sound_speed_mps : float, optional
+        Speed of sound of the frequency model (m/s; default: ``config``'s, 1500).
+    base_frequency_hz : mapping of str to float, optional
+        Known base frequencies by tonal id (Hz); the other tonals' are estimated.
+    frequency_sigma_hz : float or mapping of str to float, optional
+        Frequency standard deviation (Hz) where the input gives none: one for every tonal,
+        or by tonal id (default 0.1 Hz).
+    atb_sigma_deg, range_sigma_m : float
+        ATB (degrees) and range (m) standard deviations where the input gives none.
 
     Returns
     -------
@@ -182,22 +218,50 @@ def tma(
     >>> list(res.to_frame()["contact"])
     ['1']
     """
-    return solve(bearings, sigma_deg, config, support, manoeuvres, detect)
+    return solve(
+        bearings, sigma_deg, config, support, manoeuvres, detect,
+        sound_speed_mps=sound_speed_mps, base_frequency_hz=base_frequency_hz,
+        frequency_sigma_hz=frequency_sigma_hz, atb_sigma_deg=atb_sigma_deg,
+        range_sigma_m=range_sigma_m,
+    )  # fmt: skip
+
+
+def _tonal_items(value: Any) -> list[str]:
+    """``--frequency-sigma`` items (``HZ``, ``TONAL=HZ``) of an API argument."""
+    if value is None:
+        return []
+    if isinstance(value, Mapping):
+        return [f"{k}={float(v)!r}" for k, v in value.items()]
+    if isinstance(value, (list, tuple)):
+        return [str(v) for v in value]
+    return [repr(float(value))]
+
+
+def _is_paths(data: Any) -> bool:
+    return isinstance(data, (list, tuple)) and all(isinstance(p, (str, os.PathLike)) for p in data)
 
 
 def solve(
-    bearings: Source,
+    bearings: Source | Sequence[str | os.PathLike[str]],
     sigma_deg: float | None = None,
     config: Any = None,
     support: Source | None = None,
     manoeuvres: Sequence[float] | None = None,
     detect: bool = True,
     names: Mapping[str, str] | None = None,
+    *,
+    sound_speed_mps: float | None = None,
+    base_frequency_hz: Mapping[str, float] | None = None,
+    frequency_sigma_hz: Any = None,
+    atb_sigma_deg: float = 10.0,
+    range_sigma_m: float = 100.0,
 ) -> TMAResult:
     """:func:`tma` with the arguments named in messages as ``names`` says (the command
     line's options: ``{"sigma_deg": "--sigma-deg", "manoeuvres": "--manoeuvres"}``)."""
     name = {"sigma_deg": "sigma_deg", "manoeuvres": "manoeuvres", **(names or {})}
-    from seatrack.io.tma import read_bearings
+    from seatrack.io.rep import read_tma_files
+    from seatrack.io.tma import apply_base_frequencies
+    from seatrack.io.tma import measurement_defaults
     from seatrack.io.tma import read_support
     from seatrack.tma import TMAConfig
     from seatrack.tma import solve_many
@@ -210,22 +274,32 @@ def solve(
         raise InputError(
             f"{name['sigma_deg']} must be a number of degrees in (0, 180), got {sigma_deg}"
         )
-    sigma = math.radians(sigma_deg)
-    cfg = dataclasses.replace(cfg, sigma=sigma)
-    with as_file(bearings, "bearings") as path:
-        contacts = read_bearings(path, default_sigma=sigma)
-    sup = {}
+    speed = cfg.sound_speed if sound_speed_mps is None else float(sound_speed_mps)
+    defaults = measurement_defaults(
+        sigma_deg, _tonal_items(frequency_sigma_hz), atb_sigma_deg, range_sigma_m, speed
+    )
+    sigma = defaults.bearing
+    cfg = dataclasses.replace(cfg, sigma=sigma, sound_speed=speed)
+    if _is_paths(bearings):
+        data, frame = read_tma_files(list(bearings), defaults)  # type: ignore[arg-type]
+    else:
+        with as_file(bearings, "bearings") as path:  # type: ignore[arg-type]
+            data, frame = read_tma_files([path], defaults)
+    contacts = apply_base_frequencies(data.contacts, dict(base_frequency_hz or {}))
+    sup = {k: list(v) for k, v in data.support.items()}
     if support is not None:
         with as_file(support, "support") as spath:
-            sup = read_support(spath)
+            for cid, values in read_support(spath).items():
+                sup.setdefault(cid, []).extend(values)
         unknown = sorted(set(sup) - set(contacts))
         if unknown:
+            source = bearings[0] if _is_paths(bearings) else bearings  # type: ignore[index]
             raise InputError(
                 f"{describe_source(support)}: support values for contact(s) "
-                f"{', '.join(unknown)} not in {describe_source(bearings)}"
+                f"{', '.join(unknown)} not in {describe_source(source)}"
             )
     man: list[float] | str | None = None if not detect else "auto"
     if manoeuvres is not None:
         man = check_manoeuvres(manoeuvres, contacts, name["manoeuvres"])
     sols = solve_many(contacts, sup, man, sigma=sigma, config=cfg)
-    return TMAResult(sols, contacts)
+    return TMAResult(sols, contacts, frame)

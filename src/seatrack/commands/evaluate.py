@@ -108,7 +108,10 @@ def print_summary(
             typer.echo(f"{m} failed on this scenario: {e}")
     if crb is not None:
         rms = float(np.sqrt(np.nanmean(crb[:, skip:] ** 2)))
-        console.print(f"position CRB (constant-velocity truth, no process noise): {rms:.1f} m RMS")
+        console.print(
+            f"position bound (posterior CRB: constant-velocity truth, no process noise, the "
+            f"methods' velocity prior): {rms:.1f} m RMS"
+        )
 
 
 def write_summary_csv(path: Path, rows: list[dict[str, Any]]) -> None:

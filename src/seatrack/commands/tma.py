@@ -1,10 +1,13 @@
-"""``seatrack tma BEARINGS.csv``: bearings-only target motion analysis of every contact.
+"""``seatrack tma BEARINGS.csv`` / ``seatrack tma SENSOR.rep [TRACKS.rep ...]``: target
+motion analysis of every contact from bearings and, when given, tonal frequencies, angles
+on the bow and ranges.
 
-Formats: see :mod:`seatrack.io.tma` and ``docs/formats.md``. Without ``--manoeuvres`` the
-target leg changes are detected from the bearing residuals (``--no-detect`` fits one leg).
-Without ``--out`` the RESULT.json object is printed to standard output. Output paths are
-checked before any work and written atomically; RESULT.json is always valid JSON (``null``
-for undetermined values)."""
+A shell over :func:`seatrack.api.tma.solve`. Formats: see :mod:`seatrack.io.tma`,
+:mod:`seatrack.io.rep` and ``docs/formats.md``. Without ``--manoeuvres`` the target leg
+changes are detected from the residuals (``--no-detect`` fits one leg). Without ``--out``
+the RESULT.json object is printed to standard output. Output paths are checked before any
+work and written atomically; RESULT.json is always valid JSON (``null`` for undetermined
+values)."""
 
 from __future__ import annotations
 
@@ -41,10 +44,11 @@ def _parse_times(text: str | None) -> list[float] | None:
 def register(app: typer.Typer) -> None:
     @app.command("tma")
     def tma(
-        bearings: Path = typer.Argument(
+        bearings: list[Path] = typer.Argument(
             ...,
             help="BEARINGS.csv with columns time_s, bearing_deg, observer_x_m, observer_y_m; "
-            "optional contact, sigma_deg.",
+            "optional contact, sigma_deg, frequency_hz, frequency_sigma_hz, tonal, atb_deg, "
+            "range_m. Or Debrief REP files: SENSOR.rep [TRACKS.rep ...].",
         ),
         support: Path | None = typer.Option(
             None,
@@ -69,26 +73,63 @@ def register(app: typer.Typer) -> None:
         no_detect: bool = typer.Option(
             False, "--no-detect", help="Without --manoeuvres: fit one leg, no detection."
         ),
+        sound_speed: float = typer.Option(
+            1500.0, "--sound-speed", help="Speed of sound (m/s) of the frequency model."
+        ),
+        base_frequency: list[str] = typer.Option(
+            [],
+            "--base-frequency",
+            help="Known base frequency TONAL=HZ (repeatable); the others are estimated.",
+        ),  # fmt: skip
+        frequency_sigma: list[str] = typer.Option(
+            [],
+            "--frequency-sigma",
+            help="Frequency "
+            "sigma HZ or TONAL=HZ (repeatable) where the input has none; default 0.1 Hz.",
+        ),  # fmt: skip
+        atb_sigma_deg: float = typer.Option(
+            10.0, "--atb-sigma-deg", help="ATB sigma (deg) where the file has none."
+        ),
+        range_sigma_m: float = typer.Option(
+            100.0, "--range-sigma-m", help="Range sigma (m) where the input has none."
+        ),
+        rep_out: Path | None = typer.Option(
+            None, "--rep-out", help="Write the solutions as Debrief REP tracks (REP input)."
+        ),
     ) -> None:
-        """Bearings-only TMA (DE 3446658): position, course and speed of every contact with
-        1-sigma / 95 % values, support values, multi-leg targets and an observability check."""
+        """TMA (DE 3446658) from bearings, tonal frequencies, ATB and ranges: position, course,
+        speed and base frequencies of every contact with 1-sigma / 95 % values, support
+        values, multi-leg targets and an observability check."""
         from seatrack.api.tma import solve
         from seatrack.io.atomic import atomic_write
         from seatrack.io.atomic import check_output_path
+        from seatrack.io.rep import is_rep
+        from seatrack.io.tma import parse_tonal_values
         from seatrack.io.tma import solution_summary
 
         if not (math.isfinite(sigma_deg) and 0 < sigma_deg < 180):
             raise InputError(
                 f"--sigma-deg must be a number of degrees in (0, 180), got {sigma_deg}"
             )
-        if out is not None and plot is not None and out.resolve() == plot.resolve():
-            raise InputError(f"--out and --plot name the same file {out}")
-        for path in (out, plot):
-            if path is not None:
-                check_output_path(path)  # before any work
+        named = (("--out", out), ("--plot", plot), ("--rep-out", rep_out))
+        given = [(n, p) for n, p in named if p is not None]
+        for i, (n1, p1) in enumerate(given):
+            for n2, p2 in given[i + 1 :]:
+                if p1.resolve() == p2.resolve():
+                    raise InputError(f"{n1} and {n2} name the same file {p1}")
+        for _, path in given:
+            check_output_path(path)  # before any work
+        if rep_out is not None and not all(is_rep(p) for p in bearings):
+            raise InputError("--rep-out needs REP input (the solution needs a geographic frame)")
         times = _parse_times(manoeuvres)
+        _, base = parse_tonal_values(base_frequency, "--base-frequency", "Hz")
         names = {"sigma_deg": "--sigma-deg", "manoeuvres": "--manoeuvres"}
-        res = solve(bearings, sigma_deg, None, support, times, not no_detect, names)
+        res = solve(
+            list(bearings), sigma_deg, None, support, times, not no_detect, names,
+            sound_speed_mps=sound_speed, base_frequency_hz=base,
+            frequency_sigma_hz=list(frequency_sigma), atb_sigma_deg=atb_sigma_deg,
+            range_sigma_m=range_sigma_m,
+        )  # fmt: skip
         sols = res.solutions
         text = res.to_json()
         if out is not None:
@@ -101,6 +142,10 @@ def register(app: typer.Typer) -> None:
             typer.echo(f"wrote {out}")
         else:
             typer.echo(text, nl=False)
+        if rep_out is not None:
+            with atomic_write(rep_out) as fh:
+                fh.write(res.to_rep())
+            typer.echo(f"wrote {rep_out}")
         if plot is not None:
             from seatrack.report.tma import plot_solutions
 

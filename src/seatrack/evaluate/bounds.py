@@ -305,17 +305,21 @@ def crb_deterministic(
     info: ArrayLike | Sequence[ArrayLike],
     F: ArrayLike | Sequence[ArrayLike],
     rcond: float | None = None,
+    prior: ArrayLike | None = None,
 ) -> FloatArray:
-    """Filtering CRB of a deterministic (noise-free) trajectory without prior information.
+    """Filtering CRB of a deterministic (noise-free) trajectory, with optional prior.
 
-    With no process noise and no prior, the information about ``x_k`` from the
+    With no process noise, the information about ``x_k`` from the prior and the
     measurements of steps ``0..k`` obeys
 
-    ``J_0 = I_0``, ``J_{k+1} = F_k^-T J_k F_k^-1 + I_{k+1}``,
+    ``J_0 = J_prior + I_0``, ``J_{k+1} = F_k^-T J_k F_k^-1 + I_{k+1}``,
 
-    the limit ``Q -> 0``, ``P0 -> infinity`` of the Tichavský et al. (1998) recursion and
-    equal to the batch Fisher CRB of ``x_k`` from those measurements. This is the bound
-    for a constant-velocity target tracked from its first plot.
+    the limit ``Q -> 0`` of the Tichavský et al. (1998) recursion. Without a prior
+    (``P0 -> infinity``) it equals the batch Fisher CRB of ``x_k`` from those
+    measurements: the bound for a constant-velocity target tracked from its first plot.
+    With the information ``J_prior`` of the prior the filters start from (e.g. a zero-mean
+    velocity prior, ``diag(0, 0, 1/s^2, 1/s^2)``) it is the posterior CRB, a bound for
+    estimators that use that prior as well.
 
     Parameters
     ----------
@@ -329,6 +333,9 @@ def crb_deterministic(
         ``J_k`` scaled to unit diagonal is at most ``rcond`` times its largest (default
         :func:`seatrack.information.information_rtol`, ``100 n eps``); the test is
         scale-invariant (units of position and velocity do not matter).
+    prior : (n, n), optional
+        Prior information ``J_prior`` (inverse prior covariance; may be singular, e.g.
+        none on the position), symmetric positive semi-definite.
 
     Returns
     -------
@@ -340,6 +347,13 @@ def crb_deterministic(
     Fs = _per_step(F, K1 - 1, "F")
     out = np.full((K1, n, n), np.nan)
     J = 0.5 * (I[0] + I[0].T)
+    if prior is not None:
+        Jp = as_float64(prior)
+        if Jp.shape != (n, n) or not np.all(np.isfinite(Jp)):
+            raise ValueError(f"prior information must be a finite ({n}, {n}) matrix")
+        if np.linalg.eigvalsh(0.5 * (Jp + Jp.T)).min() < -1e-12 * max(np.abs(Jp).max(), 1e-300):
+            raise ValueError("prior information must be positive semi-definite")
+        J = J + 0.5 * (Jp + Jp.T)
     for k in range(K1):
         if k > 0:
             Fi = np.linalg.solve(Fs[k - 1], np.eye(n))  # transition: invertible by contract

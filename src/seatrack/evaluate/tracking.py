@@ -50,6 +50,7 @@ __all__ = [
     "summarize",
     "time_histories",
     "position_crb",
+    "velocity_prior_information",
     "SUMMARY_COLUMNS",
 ]
 
@@ -237,14 +238,47 @@ def compare_methods(
     )
 
 
-def position_crb(scenario: Scenario, sensor: str | None = None) -> FloatArray | None:
+def velocity_prior_information(
+    scenario: Scenario, sensor: str | None, methods: Sequence[str], d: int
+) -> FloatArray:
+    """Information ``(2d, 2d)`` of the velocity prior the ``methods`` start from.
+
+    Every method starts a track from one plot with a zero-mean velocity prior of standard
+    deviation ``initial_speed_sigma`` per axis (:func:`seatrack.filters.base.plot_gaussian`,
+    read here from each configured method's initiator). The bound takes the most
+    informative of them (the smallest sigma), so that it stays below every method's own.
+    """
+    from seatrack.filters.base import Plots
+    from seatrack.filters.registry import build
+
+    s = tracking_sensor(scenario, sensor)
+    probe = Plots(np.zeros(1), np.full(1, 1000.0), np.zeros(1),
+                  np.zeros(1) if d == 3 else None)  # fmt: skip
+    info = np.zeros((2 * d, 2 * d))
+    rr = "range_rate" in s.components
+    for m in methods:
+        try:
+            method = build(m, method_config(scenario, s, m), d=d, range_rate=rr)
+        except ValueError:  # a method these plots cannot run (it is reported as failed)
+            continue
+        _, P = method.initiate(probe)
+        Pv = np.asarray(P)[0, -d:, -d:]
+        info[d:, d:] = np.maximum(info[d:, d:], np.linalg.inv(Pv))
+    return info
+
+
+def position_crb(
+    scenario: Scenario, sensor: str | None = None, methods: Sequence[str] | None = None
+) -> FloatArray | None:
     """Cramér–Rao bound of the position of constant-velocity targets, per target and scan.
 
-    The bound is :func:`~seatrack.evaluate.bounds.crb_deterministic` (no process noise,
-    no prior: the target is known to move in a straight line at constant speed and is
-    tracked from its first plot) with the expected measurement information
-    ``p_detect H^T R^-1 H`` (exact for missed detections without clutter, which is what
-    the methods receive: each target's own plots). Jacobians are evaluated on the truth.
+    The bound is :func:`~seatrack.evaluate.bounds.crb_deterministic` (no process noise:
+    the target is known to move in a straight line at constant speed and is tracked from
+    its first plot) with the expected measurement information ``p_detect H^T R^-1 H``
+    (exact for missed detections without clutter, which is what the methods receive: each
+    target's own plots). Jacobians are evaluated on the truth. With ``methods`` it is the
+    posterior CRB with the velocity prior those methods start from
+    (:func:`velocity_prior_information`) added at the first scan; without, no prior.
 
     Returns
     -------
@@ -285,6 +319,7 @@ def position_crb(scenario: Scenario, sensor: str | None = None) -> FloatArray | 
         order.append("range_rate")
     Ri = np.diag([1.0 / sig[c] ** 2 for c in order])
     sensor_state = np.concatenate([spos[:, :d], svel[:, :d]], axis=-1)
+    prior = None if methods is None else velocity_prior_information(scenario, sensor, methods, d)
     F = [cv_transition(float(h), d) for h in np.diff(t)]
     out = []
     for p in scenario.targets:
@@ -297,7 +332,7 @@ def position_crb(scenario: Scenario, sensor: str | None = None) -> FloatArray | 
         if not np.isfinite(H).all():
             return None  # a target on the sensor: the bearing and its information undefined
         info = s.p_detect * np.einsum("kji,jl,klm->kim", H, Ri, H)
-        bound = crb_deterministic(info, F)
+        bound = crb_deterministic(info, F, prior=prior)
         out.append(np.sqrt(np.trace(bound[:, :d, :d], axis1=-2, axis2=-1)))
     return np.stack(out)
 

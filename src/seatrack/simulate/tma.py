@@ -30,6 +30,11 @@ from seatrack.simulate import Trajectory
 from seatrack.simulate import observe
 from seatrack.simulate import trajectory
 from seatrack.tma.legs import leg_starts
+from seatrack.tma.measurements import SOUND_SPEED
+from seatrack.tma.measurements import BowAngles
+from seatrack.tma.measurements import Frequencies
+from seatrack.tma.measurements import bow_angle
+from seatrack.tma.measurements import doppler_ratio
 from seatrack.tma.problem import Bearings
 
 FloatArray = NDArray[np.float64]
@@ -71,6 +76,31 @@ class TMAScenario:
         """One noisy realisation of the bearings (via :func:`seatrack.simulate.observe`)."""
         m = self.measurements(rng)
         return Bearings(m.t, m.z[:, 0], m.sensor_pos[:, :2])
+
+    def frequencies(
+        self,
+        rng: np.random.Generator,
+        base_frequency: float,
+        sigma_hz: float,
+        sound_speed: float = SOUND_SPEED,
+        tonal: str = "1",
+    ) -> Frequencies:
+        """Noisy received frequencies of one tonal at the bearing times (model of
+        :mod:`seatrack.tma.measurements`, own-ship velocity from the true trajectory)."""
+        d = self.target.pos[:, :2] - self.observer.pos[:, :2]
+        g, _, _ = doppler_ratio(d, self.observer.vel[:, :2], self.target.vel[:, :2], sound_speed)
+        f = base_frequency * g + sigma_hz * rng.standard_normal(g.shape)
+        n = self.times.size
+        return Frequencies(
+            self.times, f, self.observer.pos[:, :2], self.observer.vel[:, :2],
+            np.full(n, sigma_hz), np.full(n, tonal),
+        )  # fmt: skip
+
+    def bow_angles(self, rng: np.random.Generator, sigma: float) -> BowAngles:
+        """Noisy angles on the bow (rad) at the bearing times."""
+        d = self.target.pos[:, :2] - self.observer.pos[:, :2]
+        a = bow_angle(d, self.target.vel[:, :2]) + sigma * rng.standard_normal(self.times.size)
+        return BowAngles(self.times, a, self.observer.pos[:, :2], np.full(self.times.size, sigma))
 
     def bearings_batch(self, rng: np.random.Generator, n_runs: int) -> list[Bearings]:
         """``n_runs`` independent realisations."""

@@ -1,4 +1,5 @@
-"""Bearings-only target motion analysis (DE 3446658; method page ``docs/tma.md``).
+"""Target motion analysis: bearings (DE 3446658), tonal frequencies, angles on the bow and
+ranges (method page ``docs/tma.md``).
 
 One obvious entry point, :func:`solve`::
 
@@ -13,8 +14,8 @@ plus :func:`solve_many` (every contact in one vectorised call), :class:`TMATrack
 :mod:`seatrack.report.tma`.
 
 Module layering inside the package (each imports only those above it): ``legs``,
-``config`` -> ``support`` -> ``problem`` -> ``bounds``, ``lm`` -> ``start``, ``result`` ->
-``group`` -> ``detect`` -> ``solver`` -> ``tracker``.
+``config``, ``measurements`` -> ``support`` -> ``problem`` -> ``bounds``, ``lm`` -> ``start``,
+``result`` -> ``group`` -> ``detect`` -> ``solver`` -> ``tracker``.
 """
 
 from seatrack.tma.bounds import crb
@@ -26,6 +27,8 @@ from seatrack.tma.detect import LegDetection
 from seatrack.tma.detect import detect_legs
 from seatrack.tma.legs import leg_starts
 from seatrack.tma.legs import leg_time_matrix
+from seatrack.tma.measurements import BowAngles
+from seatrack.tma.measurements import Frequencies
 from seatrack.tma.problem import Bearings
 from seatrack.tma.problem import bearing_residuals
 from seatrack.tma.result import LastEstimate
@@ -39,6 +42,8 @@ from seatrack.tma.tracker import TMATracker
 
 __all__ = [
     "Bearings",
+    "BowAngles",
+    "Frequencies",
     "LastEstimate",
     "LegDetection",
     "SupportValue",

@@ -16,7 +16,9 @@ Conventions: x East, y North; bearings and courses in radians clockwise from Nor
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from collections.abc import Sequence
+from dataclasses import replace
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -31,6 +33,11 @@ from seatrack.tma.legs import leg_index
 from seatrack.tma.legs import leg_starts
 from seatrack.tma.legs import leg_time_matrix
 from seatrack.tma.legs import position_map
+from seatrack.tma.measurements import SOUND_SPEED
+from seatrack.tma.measurements import BowAngles
+from seatrack.tma.measurements import Frequencies
+from seatrack.tma.measurements import bow_angle
+from seatrack.tma.measurements import doppler_ratio
 from seatrack.tma.problem import Bearings
 from seatrack.tma.problem import Problem
 from seatrack.tma.support import SupportValue
@@ -90,8 +97,21 @@ def crb(
     manoeuvres: Sequence[float] | ArrayLike = (),
     support: Sequence[SupportValue] = (),
     support_residual: str = "linear",
+    frequencies: Frequencies | None = None,
+    base_frequency: Mapping[str, float] | None = None,
+    bow_angles: BowAngles | None = None,
+    sound_speed: float = SOUND_SPEED,
 ) -> FloatArray:
     """Cramér–Rao bound of the TMA state for a true trajectory and measurement times.
+
+    Any mix of measurements: bearings at ``times``, support values, frequencies and ATB
+    (their times, own-ship positions/velocities, tonals and sigmas are taken from
+    ``frequencies`` / ``bow_angles``; the measured values are replaced by the noise-free
+    ones of the true state). ``base_frequency`` gives the true ``f0`` (Hz) of every tonal;
+    the tonals whose ``f0`` is not in ``frequencies.base_frequency`` are estimated, and the
+    bound is then that of the joint vector (state, estimated ``f0`` in order of first
+    appearance): shape ``(n + T_est, n + T_est)``; its state block is the bound with the
+    base frequencies as nuisance parameters.
 
     Parameters
     ----------
@@ -106,7 +126,8 @@ def crb(
 
     Returns
     -------
-    (n, n) bound ``(J^T W J)^-1`` at the true state.
+    (n, n) bound ``(J^T W J)^-1`` at the true state (``(n + T_est, n + T_est)`` with
+    estimated base frequencies, see above).
 
     Raises
     ------
@@ -130,9 +151,27 @@ def crb(
     C = leg_time_matrix(t, starts)
     p = C @ b.reshape(-1, 2)
     z = bearing(p[:, 0] - obs[:, 0], p[:, 1] - obs[:, 1])
-    bearings = Bearings(t, np.asarray(z), obs, np.array(sig))
-    prob = Problem.build(bearings, list(support), starts, 1.0, support_residual == "square")
-    _, J = prob.evaluate(b)
+    B = b.reshape(-1, 2)
+    fr, ab = frequencies, bow_angles
+    if fr is not None and len(fr):
+        f0 = base_frequency or {}
+        missing = [k for k in fr.tonals if k not in f0]
+        if missing:
+            raise ValueError(f"base_frequency needs the true f0 of tonal(s) {missing}")
+        E = leg_time_matrix(fr.t, starts)
+        j = 1 + leg_index(fr.t, starts)
+        g, _, _ = doppler_ratio(E @ B - fr.observer, fr.observer_velocity, B[j], sound_speed)
+        assert fr.tonal is not None
+        true = np.array([f0[k] for k in fr.tonal.tolist()])
+        fr = replace(fr, frequency=true * g)
+    if ab is not None and len(ab):
+        j = 1 + leg_index(ab.t, starts)
+        ab = replace(ab, angle=bow_angle(leg_time_matrix(ab.t, starts) @ B - ab.observer, B[j]))
+    bearings = Bearings(t, np.asarray(z), obs, np.array(sig), fr, ab)
+    prob = Problem.build(
+        bearings, list(support), starts, 1.0, support_residual == "square", None, sound_speed
+    )
+    _, J = prob.augmented(b)
     return invert_jacobian_information(J, prob.weights, "TMA Fisher information")
 
 
@@ -141,13 +180,15 @@ def position_crb(bound: ArrayLike, starts: ArrayLike, t: float) -> FloatArray:
 
     Position is linear in ``beta`` (``p(t) = M(t) beta``), so the map is exact: ``M P M^T``.
     No inverse is involved; a bound that is not finite (the NaN covariance of a singular
-    geometry) or not square of the state size is a :class:`ValueError`.
+    geometry) or not square of at least the state size is a :class:`ValueError`; of a
+    joint bound (state, base frequencies) the leading state block is used.
     """
     s = np.asarray(starts, dtype=float)
     P = np.asarray(bound, dtype=float)
     n = 2 + 2 * s.size
-    if P.shape != (n, n):
+    if P.ndim != 2 or P.shape[0] != P.shape[1] or P.shape[0] < n:
         raise ValueError(f"bound has shape {P.shape}; {s.size} legs need ({n}, {n})")
+    P = P[:n, :n]  # a joint bound (state, base frequencies): the state block
     if not np.all(np.isfinite(P)):
         raise ValueError("bound is not finite (singular geometry: the state is not observable)")
     M = position_map(leg_time_matrix(np.array([t]), s)[0])

@@ -71,6 +71,8 @@ class TMAConfig:
         stated sigmas: wrong sigma, outliers or a target manoeuvre not in the model).
     confidence : float
         Probability of the reported confidence values (two-sided) and ellipses.
+    sound_speed : float
+        Speed of sound (m/s) of the frequency (Doppler) model.
     """
 
     sigma: float = math.radians(1.0)
@@ -92,6 +94,7 @@ class TMAConfig:
     max_relative_range_sigma: float = 0.5
     residual_test_probability: float = 0.999
     confidence: float = 0.95
+    sound_speed: float = 1500.0
 
     def __post_init__(self) -> None:
         _check(self.support_residual in ("linear", "square"), "support_residual",
@@ -117,6 +120,8 @@ class TMAConfig:
         _check(_finite(self.min_observer_deviation) and self.min_observer_deviation >= 0,
                "min_observer_deviation", "a finite number >= 0 (m)",
                self.min_observer_deviation)  # fmt: skip
+        c = self.sound_speed
+        _check(_finite(c) and 100 < c < 10_000, "sound_speed", "in (100, 10000) m/s", c)
         r = self.max_relative_range_sigma
         rule = "a positive number (inf disables the test)"
         ok_r = isinstance(r, (int, float)) and not math.isnan(r) and r > 0

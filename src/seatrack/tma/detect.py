@@ -105,7 +105,10 @@ class _Search:
         t0 = float(b.t[0])
         starts = [leg_starts(t0, m) for m, _ in candidates]
         square = cfg.support_residual == "square"
-        probs = [Problem.build(b, self.support, s, self.sigma, square) for s in starts]
+        probs = [
+            Problem.build(b, self.support, s, self.sigma, square, None, cfg.sound_speed)
+            for s in starts
+        ]
         warm = np.stack([beta for _, beta in candidates])
         pre = np.zeros(len(candidates), dtype=np.int64)
         if auto:
@@ -161,7 +164,8 @@ def detect_legs(
     bearings, support, sigma, config : as for :func:`seatrack.tma.solve`.
     max_legs : largest number of legs tried.
     min_leg_bearings : fewest bearings in any leg.
-    penalty : required cost decrease per extra leg (default ``3 ln N``, BIC).
+    penalty : required cost decrease per extra leg (default ``3 ln N``, BIC, with ``N``
+        the number of measurements of every kind).
     max_passes : passes of the change-time re-placement after each accepted leg.
     max_candidates : candidate change times solved in one batch; with more bearings a
         coarse evenly spaced scan is refined around its best candidate.
@@ -175,7 +179,8 @@ def detect_legs(
     sig = cfg.sigma if sigma is None else float(sigma)
     t = bearings.t
     N = t.size
-    pen = 3.0 * math.log(N) if penalty is None else float(penalty)
+    rows = N + len(sup) + bearings.n_frequencies + bearings.n_bow_angles
+    pen = 3.0 * math.log(rows) if penalty is None else float(penalty)
     t0 = float(t[0])
     one = solve_group([Item(bearings, sup, leg_starts(t0, ()))], cfg, sig)[0]
     search = _Search(bearings, sup, sig, cfg)

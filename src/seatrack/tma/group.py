@@ -54,6 +54,16 @@ class Item:
     detected: bool = False
 
 
+def _real_rows(stacked: Problem, p: Problem) -> NDArray[np.int64]:
+    """Indices of the rows of ``p`` in the padded batch ``stacked`` (blocks bearings,
+    support, frequency, ATB)."""
+    out, off = [], 0
+    for name in ("z", "sk", "fz", "az"):
+        out.append(off + np.arange(getattr(p, name).shape[-1]))
+        off += getattr(stacked, name).shape[-1]
+    return np.concatenate(out).astype(np.int64)
+
+
 def solve_group(items: Sequence[Item], cfg: TMAConfig, sigma: float) -> list[TMASolution]:
     """Solve problems with equal state size together (``sigma``: default bearing sigma, rad)."""
     n = 2 + 2 * items[0].starts.size
@@ -72,19 +82,23 @@ def solve_group(items: Sequence[Item], cfg: TMAConfig, sigma: float) -> list[TMA
         beta0[need] = found.beta
         its[need] += found.iterations
         tot[need] += found.iterations_total
-    stacked = Problem.stack(
-        [Problem.build(it.bearings, it.support, it.starts, sigma, square) for it in items]
-    )
+    probs = [
+        Problem.build(it.bearings, it.support, it.starts, sigma, square, None, cfg.sound_speed)
+        for it in items
+    ]
+    stacked = Problem.stack(probs)
     res = levenberg_marquardt(stacked, beta0, cfg, cfg.max_iterations)
     W = stacked.weights
     out = []
     for i, it in enumerate(items):
-        N, M = len(it.bearings), len(it.support)
-        keep = np.r_[np.arange(N), stacked.z.shape[1] + np.arange(M)]
+        keep = _real_rows(stacked, probs[i])
+        J, f0 = res.J[i][keep], np.zeros(0)
+        if probs[i].fz.size:  # joint Jacobian of the state and the base frequencies
+            f0, J = probs[i].augmented(res.beta[i])
         fit = Fit(
-            res.beta[i], float(res.cost[i]), res.r[i][keep], res.J[i][keep], W[i][keep],
+            res.beta[i], float(res.cost[i]), res.r[i][keep], J, W[i][keep],
             int(its[i] + res.iterations[i]), int(tot[i] + res.iterations[i]),
-            bool(res.converged[i]),
+            bool(res.converged[i]), f0,
         )  # fmt: skip
         out.append(finalise(it.bearings, it.support, it.starts, fit, cfg, it.detected))
     return out

@@ -21,14 +21,27 @@ from numpy.typing import NDArray
 from seatrack.geometry import bearing
 from seatrack.geometry import wrap_pi
 from seatrack.models.measurement import bearing_jacobian
+from seatrack.tma.legs import leg_index
 from seatrack.tma.legs import leg_time_matrix
+from seatrack.tma.measurements import SOUND_SPEED
+from seatrack.tma.measurements import BowAngles
+from seatrack.tma.measurements import Frequencies
+from seatrack.tma.measurements import bow_angle_residuals
+from seatrack.tma.measurements import frequency_residuals
 from seatrack.tma.support import SupportValue
 from seatrack.tma.support import support_residuals
 from seatrack.tma.support import support_rows
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["Bearings", "Problem", "bearing_residuals"]
+__all__ = ["Bearings", "Problem", "bearing_residuals", "decimate"]
+
+
+def decimate(n: int, k: int) -> NDArray[np.int64] | None:
+    """At most ``k`` evenly spaced indices of ``n`` (first and last kept); None if ``n <= k``."""
+    if n <= k:
+        return None
+    return np.unique(np.round(np.linspace(0, n - 1, k)).astype(np.int64))
 
 
 @dataclass(frozen=True)
@@ -41,12 +54,18 @@ class Bearings:
     bearing : (N,) rad, true bearing clockwise from North (any wrap).
     observer : (N, 2) m, observer position (East, North) at each bearing.
     sigma : (N,) rad, optional per-bearing standard deviation (else the solver's ``sigma``).
+    frequencies : optional tonal frequencies of the contact
+        (:class:`~seatrack.tma.measurements.Frequencies`), none before ``t[0]``.
+    bow_angles : optional angles on the bow (:class:`~seatrack.tma.measurements.BowAngles`),
+        none before ``t[0]``.
     """
 
     t: FloatArray
     bearing: FloatArray
     observer: FloatArray
     sigma: FloatArray | None = None
+    frequencies: Frequencies | None = None
+    bow_angles: BowAngles | None = None
 
     def __post_init__(self) -> None:
         t = np.asarray(self.t, dtype=float).reshape(-1)
@@ -76,6 +95,22 @@ class Bearings:
             if not np.all(np.isfinite(s) & (s > 0)):
                 raise ValueError("bearing sigma must be finite and positive")
             object.__setattr__(self, "sigma", s)
+        for name, extra in (("frequency", self.frequencies), ("ATB", self.bow_angles)):
+            if extra is not None and len(extra) and extra.t.min() < t[0]:
+                raise ValueError(
+                    f"a {name} measurement at {extra.t.min():g} s is before the first bearing "
+                    f"({t[0]:g} s), the reference time of the solution"
+                )
+
+    @property
+    def n_frequencies(self) -> int:
+        """Number of frequency measurements."""
+        return 0 if self.frequencies is None else len(self.frequencies)
+
+    @property
+    def n_bow_angles(self) -> int:
+        """Number of ATB measurements."""
+        return 0 if self.bow_angles is None else len(self.bow_angles)
 
     def __len__(self) -> int:
         return int(self.t.size)
@@ -110,19 +145,44 @@ def bearing_residuals(
     return np.asarray(r, dtype=float), J
 
 
+def _leg_rows(t: FloatArray, starts: FloatArray) -> FloatArray:
+    """One-hot rows ``(N, 1 + L)`` selecting the velocity of the leg each time falls in."""
+    E = np.zeros((t.size, starts.size + 1))
+    E[np.arange(t.size), 1 + leg_index(t, starts)] = 1.0
+    return E
+
+
+#: Problem fields per measurement axis: bearings (N), support (M), frequencies (F), ATB (A),
+#: tonals (T); the others have no row axis. Weights pad with zeros, geometry with its last
+#: row (finite, weight zero).
+_AXES = {
+    "C": "N", "obs": "N", "z": "N", "wb": "N",
+    "sk": "M", "sA": "M", "soff": "M", "sval": "M", "sw": "M",
+    "fC": "F", "fE": "F", "fobs": "F", "fvel": "F", "fz": "F", "fw": "F", "fO": "F",
+    "f0fix": "T",
+    "aC": "A", "aE": "A", "aobs": "A", "az": "A", "aw": "A",
+}  # fmt: skip
+_ZERO_PAD = {"wb", "sk", "sA", "soff", "sval", "sw", "fw", "fO", "aw", "f0fix"}
+
+
 @dataclass(frozen=True)
 class Problem:
     """Arrays of one (or a padded batch of) least-squares problem(s).
 
     Leading dimension ``K`` (batch) is optional; bearing arrays ``(K, N, ...)``, support
-    arrays ``(K, M, ...)``; padded rows have zero weight.
+    arrays ``(K, M, ...)``, frequency arrays ``(K, F, ...)``, ATB arrays ``(K, A, ...)``;
+    padded rows have zero weight.
 
     Attributes
     ----------
     C : (K, N, 1 + L) coefficient rows of the bearings; obs : (K, N, 2) m; z : (K, N) rad;
     wb : (K, N) bearing weights ``1/sigma^2``; sk, sA, soff, sval, sw : support rows
     (:class:`~seatrack.tma.support.SupportRows`); square : squared support residuals;
-    c_last : (K, 1 + L) coefficient row of the last bearing time (convergence test).
+    c_last : (K, 1 + L) coefficient row of the last bearing time (convergence test);
+    fC, fE : (K, F, 1 + L) position / leg-velocity rows of the frequencies; fobs, fvel :
+    (K, F, 2) own-ship position (m) and velocity (m/s); fz : (K, F) Hz; fw : (K, F) Hz^-2;
+    fO : (K, F, T) tonal membership; f0fix : (K, T) known base frequency (Hz), NaN where
+    estimated; aC, aE, aobs, az, aw : the same for the ATB rows (rad); sound_speed : m/s.
     """
 
     C: FloatArray
@@ -136,6 +196,20 @@ class Problem:
     sw: FloatArray
     square: bool
     c_last: FloatArray
+    fC: FloatArray
+    fE: FloatArray
+    fobs: FloatArray
+    fvel: FloatArray
+    fz: FloatArray
+    fw: FloatArray
+    fO: FloatArray
+    f0fix: FloatArray
+    aC: FloatArray
+    aE: FloatArray
+    aobs: FloatArray
+    az: FloatArray
+    aw: FloatArray
+    sound_speed: float = SOUND_SPEED
 
     @staticmethod
     def build(
@@ -145,70 +219,160 @@ class Problem:
         sigma: float,
         square: bool = False,
         index: NDArray[np.int64] | None = None,
+        sound_speed: float = SOUND_SPEED,
     ) -> Problem:
         """Unbatched problem for one contact.
 
         ``sigma`` (rad) applies where ``bearings.sigma`` is None; ``index`` selects bearings
-        (the start search uses a subset); ``square`` selects the patent's squared support
-        residuals.
+        (the start search uses a subset; the frequency and ATB rows are then thinned to at
+        most as many, evenly spaced); ``square`` selects the patent's squared support
+        residuals; ``sound_speed`` in m/s.
         """
         sig = bearings.sigma if bearings.sigma is not None else np.full(len(bearings), sigma)
         t, z, obs = bearings.t, bearings.bearing, bearings.observer
         if index is not None:
             t, z, obs, sig = t[index], z[index], obs[index], sig[index]
         rows = support_rows(support, starts, square)
+        L1 = starts.size + 1
+        fr, ab = bearings.frequencies, bearings.bow_angles
+        if index is not None:
+            fi = None if fr is None else decimate(len(fr), index.size)
+            fr = fr if fr is None or fi is None else fr.subset(fi)
+            ai = None if ab is None else decimate(len(ab), index.size)
+            ab = ab if ab is None or ai is None else ab.subset(ai)
+        f_names = ("fC", "fE", "fobs", "fvel", "fz", "fw", "fO", "f0fix")
+        a_names = ("aC", "aE", "aobs", "az", "aw")
+        extra: dict[str, FloatArray] = {}
+        if fr is None or not len(fr):
+            shapes = [(0, L1), (0, L1), (0, 2), (0, 2), (0,), (0,), (0, 0), (0,)]
+            extra.update({k: np.zeros(sh) for k, sh in zip(f_names, shapes, strict=True)})
+        else:
+            tonals = fr.tonals
+            assert fr.tonal is not None
+            fO = (fr.tonal[:, None] == np.asarray(tonals, dtype=str)[None, :]).astype(float)
+            f0fix = np.array([fr.base_frequency.get(k, np.nan) for k in tonals], dtype=float)
+            vals = (
+                leg_time_matrix(fr.t, starts), _leg_rows(fr.t, starts), fr.observer,
+                fr.observer_velocity, fr.frequency, 1.0 / fr.sigma**2, fO, f0fix,
+            )  # fmt: skip
+            extra.update(zip(f_names, vals, strict=True))
+        if ab is None or not len(ab):
+            shapes = [(0, L1), (0, L1), (0, 2), (0,), (0,)]
+            extra.update({k: np.zeros(sh) for k, sh in zip(a_names, shapes, strict=True)})
+        else:
+            avals = (
+                leg_time_matrix(ab.t, starts), _leg_rows(ab.t, starts), ab.observer, ab.angle,
+                1.0 / ab.sigma**2,
+            )  # fmt: skip
+            extra.update(zip(a_names, avals, strict=True))
         return Problem(
-            leg_time_matrix(t, starts), np.asarray(obs, dtype=float), np.asarray(z, dtype=float),
-            1.0 / sig**2, rows.kind, rows.A, rows.offset, rows.value, rows.weight, rows.square,
-            leg_time_matrix(bearings.t[-1:], starts)[0],
+            C=leg_time_matrix(t, starts), obs=np.asarray(obs, dtype=float),
+            z=np.asarray(z, dtype=float), wb=1.0 / sig**2, sk=rows.kind, sA=rows.A,
+            soff=rows.offset, sval=rows.value, sw=rows.weight, square=rows.square,
+            c_last=leg_time_matrix(bearings.t[-1:], starts)[0], sound_speed=float(sound_speed),
+            **extra,
         )  # fmt: skip
 
     @staticmethod
     def stack(problems: Sequence[Problem]) -> Problem:
         """Pad and stack unbatched problems of equal state size into a batch."""
-        N = max(p.z.size for p in problems)
-        M = max(p.sk.size for p in problems)
+        size = {
+            ax: max(getattr(p, name).shape[0] for p in problems)
+            for name, ax in (("z", "N"), ("sk", "M"), ("fz", "F"), ("az", "A"), ("f0fix", "T"))
+        }
 
-        def padb(a: NDArray[Any], n: int, zero: bool) -> NDArray[Any]:
-            if a.shape[0] == n:
+        def padb(a: NDArray[Any], n: int, zero: bool, axis: int = 0) -> NDArray[Any]:
+            if a.shape[axis] == n:
                 return a
-            if zero or a.shape[0] == 0:
-                fill = np.zeros((n - a.shape[0],) + a.shape[1:], a.dtype)
+            if zero or a.shape[axis] == 0:
+                shape = list(a.shape)
+                shape[axis] = n - a.shape[axis]
+                fill = np.zeros(shape, a.dtype)
             else:  # repeat the last real row (finite geometry), weight set to zero
                 fill = np.repeat(a[-1:], n - a.shape[0], axis=0)
-            return np.concatenate([a, fill], axis=0)
+            return np.concatenate([a, fill], axis=axis)
 
-        def col(name: str, n: int, zero: bool) -> NDArray[Any]:
-            return np.stack([padb(getattr(p, name), n, zero) for p in problems])
+        def col(name: str) -> NDArray[Any]:
+            n = size[_AXES[name]]
+            arrs = [padb(getattr(p, name), n, name in _ZERO_PAD) for p in problems]
+            if name == "fO":  # tonal columns too
+                arrs = [padb(a, size["T"], True, axis=1) for a in arrs]
+            return np.stack(arrs)
 
+        cols = {name: col(name) for name in _AXES}
         return Problem(
-            col("C", N, False), col("obs", N, False), col("z", N, False), col("wb", N, True),
-            col("sk", M, True), col("sA", M, True), col("soff", M, True), col("sval", M, True),
-            col("sw", M, True), problems[0].square, np.stack([p.c_last for p in problems]),
+            square=problems[0].square, c_last=np.stack([p.c_last for p in problems]),
+            sound_speed=problems[0].sound_speed, **cols,
         )  # fmt: skip
 
     def repeat(self, k: int) -> Problem:
         """Each batch entry repeated ``k`` times (for multi-start), batch ``K * k``."""
-
-        def rep(a: NDArray[Any]) -> NDArray[Any]:
-            return np.repeat(a, k, axis=0)
-
+        cols = {name: np.repeat(getattr(self, name), k, axis=0) for name in _AXES}
         return Problem(
-            rep(self.C), rep(self.obs), rep(self.z), rep(self.wb), rep(self.sk), rep(self.sA),
-            rep(self.soff), rep(self.sval), rep(self.sw), self.square, rep(self.c_last),
+            square=self.square, c_last=np.repeat(self.c_last, k, axis=0),
+            sound_speed=self.sound_speed, **cols,
         )  # fmt: skip
 
     @property
     def weights(self) -> FloatArray:
-        """Row weights ``(..., N + M)``: bearings, then support values."""
-        return np.concatenate([self.wb, self.sw], axis=-1)
+        """Row weights ``(..., N + M + F + A)``: bearings, support values, frequencies, ATB."""
+        return np.concatenate([self.wb, self.sw, self.fw, self.aw], axis=-1)
 
     def evaluate(self, beta: ArrayLike) -> tuple[FloatArray, FloatArray]:
-        """Stacked residuals ``(..., N + M)`` and Jacobian ``(..., N + M, n)``."""
+        """Stacked residuals ``(..., N + M + F + A)`` and Jacobian ``(..., N + M + F + A, n)``
+        (frequency rows with the unknown base frequencies eliminated, see
+        :func:`~seatrack.tma.measurements.frequency_residuals`)."""
         b = np.asarray(beta, dtype=float)
         r, J = bearing_residuals(b, self.C, self.obs, self.z)
-        if self.sk.shape[-1] == 0:
+        rs_, Js_ = [r], [J]
+        if self.sk.shape[-1]:
+            B = b.reshape(b.shape[:-1] + (-1, 2))
+            rs, Js = support_residuals(B, self.sk, self.sA, self.soff, self.sval, self.square)
+            rs_.append(rs)
+            Js_.append(Js)
+        if self.fz.shape[-1]:
+            rf, Jf, _, _ = self._frequency(b)
+            rs_.append(rf)
+            Js_.append(Jf)
+        if self.az.shape[-1]:
+            ra, Ja = bow_angle_residuals(b, self.aC, self.aE, self.aobs, self.az)
+            rs_.append(ra)
+            Js_.append(Ja)
+        if len(rs_) == 1:
             return r, J
-        B = b.reshape(b.shape[:-1] + (-1, 2))
-        rs, Js = support_residuals(B, self.sk, self.sA, self.soff, self.sval, self.square)
-        return np.concatenate([r, rs], -1), np.concatenate([J, Js], -2)
+        return np.concatenate(rs_, -1), np.concatenate(Js_, -2)
+
+    def _frequency(self, b: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        return frequency_residuals(
+            b, self.fC, self.fE, self.fobs, self.fvel, self.fz, self.fw, self.fO, self.f0fix,
+            self.sound_speed,
+        )  # fmt: skip
+
+    @property
+    def estimated_tonals(self) -> NDArray[np.bool_]:
+        """(T,) True for the tonals whose base frequency is estimated (unbatched problem)."""
+        return np.asarray(np.isnan(self.f0fix))
+
+    def augmented(self, beta: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """Base frequencies ``(T,)`` (Hz) at ``beta`` and the Jacobian ``(R, n + T_est)`` of
+        every row w.r.t. ``beta`` and the estimated base frequencies (unbatched problem;
+        rows as in :meth:`evaluate`). Its Fisher information is that of the joint
+        parameter vector, so its inverse gives the covariance of the base frequencies."""
+        b = np.asarray(beta, dtype=float)
+        _, J = self.evaluate(b)
+        if not self.fz.shape[-1]:
+            return np.zeros(0), J
+        _, _, f0, g = self._frequency(b)
+        est = self.estimated_tonals
+        n0 = J.shape[0] - self.fz.shape[-1] - self.az.shape[-1]
+        # the unprojected frequency Jacobian: f0 * dg/dbeta
+        fixed = np.where(est, 0.0, self.f0fix)
+        plain = frequency_residuals(
+            b, self.fC, self.fE, self.fobs, self.fvel, self.fz, self.fw, self.fO,
+            np.where(est, f0, fixed), self.sound_speed,
+        )[1]  # fmt: skip
+        J = J.copy()
+        J[n0 : n0 + plain.shape[0]] = plain
+        G = np.zeros((J.shape[0], int(est.sum())))
+        G[n0 : n0 + plain.shape[0]] = g[:, None] * self.fO[:, est]
+        return f0, np.concatenate([J, G], axis=1)

@@ -37,6 +37,7 @@ from scipy.stats import norm
 
 from seatrack.information import RankCheck
 from seatrack.information import covariance_from_jacobian
+from seatrack.tma.bounds import OPERATOR_NAMES
 from seatrack.tma.bounds import operator_values
 from seatrack.tma.bounds import position_crb
 from seatrack.tma.config import TMAConfig
@@ -123,6 +124,19 @@ class TMASolution:
     last : :class:`LastEstimate` at the last bearing time.
     manoeuvres_detected : True if the leg start times were found from the data.
     warnings : human-readable warnings.
+    tonals : tonal ids of the frequency measurements.
+    base_frequency, sigma_base_frequency : (T,) Hz, base frequency ``f0`` of each tonal and
+        its 1-sigma (0 for a given ``f0``; NaN when not determined).
+    base_frequency_fixed : (T,) the base frequency was given, not estimated.
+    support_residuals, frequency_residuals, bow_angle_residuals : residuals of the other
+        measurement kinds (support unit, Hz, rad).
+    nis : per measurement kind (``bearing``, ``support``, ``frequency``, ``atb``) the sum of
+        the squared normalised residuals ``sum r^2 / sigma^2`` and the number of rows.
+    determined : for ``x, y, range, bearing, course, speed`` at the last bearing time and
+        ``f0:<tonal>`` of each estimated tonal: True when the data determine it (see
+        :func:`determined_parameters`).
+    leg_estimates : :class:`LastEstimate` at the last bearing of each leg.
+    sound_speed : m/s, of the frequency model.
     """
 
     t0: float
@@ -144,6 +158,17 @@ class TMASolution:
     n_support: int
     manoeuvres_detected: bool = False
     warnings: tuple[str, ...] = field(default_factory=tuple)
+    tonals: tuple[str, ...] = ()
+    base_frequency: FloatArray = field(default_factory=lambda: np.zeros(0))
+    sigma_base_frequency: FloatArray = field(default_factory=lambda: np.zeros(0))
+    base_frequency_fixed: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
+    support_residuals: FloatArray = field(default_factory=lambda: np.zeros(0))
+    frequency_residuals: FloatArray = field(default_factory=lambda: np.zeros(0))
+    bow_angle_residuals: FloatArray = field(default_factory=lambda: np.zeros(0))
+    nis: dict[str, tuple[float, int]] = field(default_factory=dict)
+    determined: dict[str, bool] = field(default_factory=dict)
+    leg_estimates: tuple[LastEstimate, ...] = ()
+    sound_speed: float = 1500.0
 
     @property
     def valid(self) -> bool:
@@ -177,7 +202,10 @@ class Fit:
     """Outcome of the iteration for one problem, input of :func:`finalise`.
 
     ``r``, ``J``, ``w``: residuals, Jacobian and weights of the real (unpadded) rows at
-    ``beta``, bearings first, then support values.
+    ``beta``: bearings first, then support values, frequencies, ATB. With frequencies ``J``
+    has one more column per estimated base frequency (joint Jacobian,
+    :meth:`~seatrack.tma.problem.Problem.augmented`) and ``f0`` holds every tonal's base
+    frequency (Hz).
     """
 
     beta: FloatArray
@@ -188,6 +216,7 @@ class Fit:
     iterations: int
     iterations_total: int
     converged: bool
+    f0: FloatArray = field(default_factory=lambda: np.zeros(0))
 
 
 def observer_deviation(t: ArrayLike, observer: ArrayLike) -> float:
@@ -211,7 +240,10 @@ def _verdict(
     dev: float, n_rows: int, n: int, n_support: int, chk: RankCheck, rel: float,
     converged: bool, cfg: TMAConfig,
 ) -> tuple[bool, list[str]]:  # fmt: skip
-    """Observability (a)-(c) of the module docstring and the reasons, in order."""
+    """Observability (a)-(c) of the module docstring and the reasons, in order.
+
+    ``n_support`` counts every measurement that is not a bearing (support values,
+    frequencies, ATB); ``n`` the unknowns (state and estimated base frequencies)."""
     why: list[str] = []
     geometry_ok = dev > cfg.min_observer_deviation or n_support > 0
     if not geometry_ok:
@@ -243,7 +275,7 @@ def _verdict(
 
 
 def _residual_warning(fit: Fit, N: int, n_support: int, cfg: TMAConfig) -> list[str]:
-    dof = N + n_support - fit.beta.size
+    dof = N + n_support - fit.J.shape[1]
     if dof <= 0:
         return []
     q = _chi2_quantile(cfg.residual_test_probability, dof)
@@ -277,6 +309,61 @@ def _last_estimate(
     )  # fmt: skip
 
 
+def determined_parameters(
+    Jw: FloatArray, functionals: FloatArray, rtol: float, tol: float = 1e-6
+) -> NDArray[np.bool_]:
+    """Which linear functionals ``g @ theta`` of the parameters the data determine.
+
+    ``g`` is determined when it is orthogonal to the null space of the whitened Jacobian
+    ``Jw`` (columns scaled to unit norm, singular values at or below ``rtol`` times the
+    largest taken as zero): ``|g_s . v| <= tol |g_s|`` for every null vector ``v``, with
+    ``g_s`` the functional in scaled parameters. A full-rank Jacobian determines them all.
+    """
+    norms = np.sqrt(np.sum(Jw * Jw, axis=0))
+    G = np.atleast_2d(functionals)
+    zero = norms <= 0
+    s = np.where(zero, 1.0, norms)
+    Js = Jw / s
+    _, sv, Vt = np.linalg.svd(Js, full_matrices=Js.shape[0] < Js.shape[1])
+    sv = np.concatenate([sv, np.zeros(Vt.shape[0] - sv.size)])
+    null = Vt[sv <= rtol * max(float(sv[0]), 1e-300)]
+    Gs = G / s
+    touches_zero = np.any(np.abs(G[:, zero]) > 0, axis=1)
+    if not null.shape[0]:
+        return np.asarray(~touches_zero)
+    proj = np.abs(Gs @ null.T).max(axis=1)
+    scale = np.sqrt(np.sum(Gs * Gs, axis=1))
+    return np.asarray((proj <= tol * scale) & ~touches_zero)
+
+
+def _nis(fit: Fit, sizes: dict[str, int]) -> dict[str, tuple[float, int]]:
+    """Sum of squared normalised residuals and row count per measurement kind."""
+    out, off = {}, 0
+    for kind, m in sizes.items():
+        if m:
+            sl = slice(off, off + m)
+            out[kind] = (float(np.sum(fit.w[sl] * fit.r[sl] ** 2)), m)
+        off += m
+    return out
+
+
+def _leg_estimates(
+    bearings: Bearings, starts: FloatArray, beta: FloatArray, P: FloatArray | None,
+    valid: bool, conf: float,
+) -> tuple[LastEstimate, ...]:  # fmt: skip
+    """Operator picture at the last bearing of every leg."""
+    out = []
+    ends = np.concatenate([starts[1:], [np.inf]])
+    for e in ends:
+        i = int(np.searchsorted(bearings.t, e, side="left")) - 1
+        t = float(bearings.t[i])
+        vals, G = operator_values(beta, starts, t, bearings.observer[i])
+        cov6 = G @ P @ G.T if P is not None else np.full((6, 6), np.nan)
+        sb = float(np.sqrt(max(cov6[3, 3], 0.0))) if P is not None else math.nan
+        out.append(_last_estimate(vals, cov6, valid, sb, t, conf))
+    return tuple(out)
+
+
 def finalise(
     bearings: Bearings,
     support: Sequence[SupportValue],
@@ -287,23 +374,59 @@ def finalise(
 ) -> TMASolution:
     """Covariance, observability verdict, warnings and operator picture of one fit."""
     n = fit.beta.size
+    na = fit.J.shape[1]  # state and estimated base frequencies
     N = len(bearings)
-    P, chk = covariance_from_jacobian(np.sqrt(fit.w)[:, None] * fit.J, cfg.rank_tolerance)
+    M, F, A = len(support), bearings.n_frequencies, bearings.n_bow_angles
+    Jw = np.sqrt(fit.w)[:, None] * fit.J
+    P_full, chk = covariance_from_jacobian(Jw, cfg.rank_tolerance)
     t_last = float(bearings.t[-1])
     vals, G = operator_values(fit.beta, starts, t_last, bearings.observer[-1])
-    if P is None:
+    if P_full is None:
         P = np.full((n, n), np.nan)
         cov6 = np.full((6, 6), np.nan)
         rel = math.inf
     else:
+        P = P_full[:n, :n]
         cov6 = G @ P @ G.T
         rel = float(math.sqrt(max(cov6[2, 2], 0.0)) / vals[2]) if vals[2] > 0 else math.inf
     dev = observer_deviation(bearings.t, bearings.observer)
-    observable, warnings = _verdict(dev, fit.r.size, n, len(support), chk, rel, fit.converged, cfg)
-    warnings += _residual_warning(fit, N, len(support), cfg)
+    extra = M + F + A
+    observable, warnings = _verdict(dev, fit.r.size, na, extra, chk, rel, fit.converged, cfg)
+    warnings += _residual_warning(fit, N, extra, cfg)
     bs = float(1.0 / np.sqrt(fit.w[N - 1]))  # measurement sigma of the last bearing
-    last = _last_estimate(vals, cov6, observable and fit.converged, bs, t_last, cfg.confidence)
+    valid = observable and fit.converged
+    last = _last_estimate(vals, cov6, valid, bs, t_last, cfg.confidence)
     rb = fit.r[:N]
+    tonals: tuple[str, ...] = ()
+    f0 = sf0 = np.zeros(0)
+    fixed = np.zeros(0, bool)
+    names = list(OPERATOR_NAMES)
+    funcs = np.concatenate([G, np.zeros((6, na - n))], axis=1)
+    if F:
+        assert bearings.frequencies is not None
+        fr = bearings.frequencies
+        tonals = tuple(fr.tonals)
+        fixed = np.array([k in fr.base_frequency for k in tonals])
+        f0 = np.asarray(fit.f0, dtype=float)
+        sf0 = np.zeros(len(tonals))
+        est_cov = np.diag(P_full)[n:] if P_full is not None else np.full(na - n, np.nan)
+        sf0[~fixed] = np.sqrt(np.maximum(est_cov, 0.0))
+        est_rows = np.eye(na)[n:]
+        funcs = np.concatenate([funcs, est_rows])
+        names += [f"f0:{k}" for k in np.asarray(tonals)[~fixed]]
+    if chk.full_rank:
+        det = np.ones(len(names), bool)
+    else:
+        det = determined_parameters(Jw, funcs, cfg.rank_tolerance)
+    if not observable:  # bearings alone fix only the bearing; other rows follow the rank test
+        geometry = dev > cfg.min_observer_deviation or extra > 0
+        det = det & (np.arange(det.size) == 3) if not geometry or chk.full_rank else det
+    if F and not valid:  # a sigma only for a base frequency the data determine
+        sf0[~fixed] = [
+            np.sqrt(max(P_full[n + j, n + j], 0.0)) if (P_full is not None and det[6 + j])
+            else np.nan for j in range(int((~fixed).sum()))
+        ]  # fmt: skip
+    sizes = {"bearing": N, "support": M, "frequency": F, "atb": A}
     return TMASolution(
         t0=float(bearings.t[0]), starts=np.asarray(starts, dtype=float),
         state=np.asarray(fit.beta, dtype=float), covariance=P, iterations=int(fit.iterations),
@@ -311,6 +434,15 @@ def finalise(
         cost=float(fit.cost), residuals=np.asarray(rb, dtype=float),
         residual_rms=float(np.sqrt(np.mean(rb**2))), observable=bool(observable),
         condition_number=float(chk.condition), smallest_singular_value=float(chk.smallest),
-        observer_deviation=dev, last=last, n_bearings=N, n_support=len(support),
-        manoeuvres_detected=detected, warnings=tuple(warnings),
+        observer_deviation=dev, last=last, n_bearings=N, n_support=M,
+        manoeuvres_detected=detected, warnings=tuple(warnings), tonals=tonals,
+        base_frequency=f0, sigma_base_frequency=sf0, base_frequency_fixed=fixed,
+        support_residuals=np.asarray(fit.r[N : N + M]),
+        frequency_residuals=np.asarray(fit.r[N + M : N + M + F]),
+        bow_angle_residuals=np.asarray(fit.r[N + M + F :]),
+        nis=_nis(fit, sizes),
+        determined={k: bool(v) for k, v in zip(names, det, strict=True)},
+        leg_estimates=_leg_estimates(bearings, starts, fit.beta, None if P_full is None else P,
+                                     valid, cfg.confidence),
+        sound_speed=cfg.sound_speed,
     )  # fmt: skip

@@ -25,6 +25,7 @@ from seatrack.tma.config import TMAConfig
 from seatrack.tma.lm import levenberg_marquardt
 from seatrack.tma.problem import Bearings
 from seatrack.tma.problem import Problem
+from seatrack.tma.problem import decimate
 from seatrack.tma.support import SupportValue
 
 FloatArray = NDArray[np.float64]
@@ -46,13 +47,6 @@ class StartSearch:
     beta: FloatArray
     iterations: NDArray[np.int64]
     iterations_total: NDArray[np.int64]
-
-
-def decimate(n: int, k: int) -> NDArray[np.int64] | None:
-    """At most ``k`` evenly spaced indices of ``n`` (first and last kept); None if ``n <= k``."""
-    if n <= k:
-        return None
-    return np.unique(np.round(np.linspace(0, n - 1, k)).astype(np.int64))
 
 
 def two_range_starts(bearings: Bearings, n: int, cfg: TMAConfig) -> FloatArray:
@@ -95,7 +89,7 @@ def auto_start(
     starts_list, probs = [], []
     for b, s, st in items:
         idx = decimate(len(b), cfg.start_max_bearings)
-        p = Problem.build(b, s, st, sigma, cfg.support_residual == "square", idx)
+        p = Problem.build(b, s, st, sigma, cfg.support_residual == "square", idx, cfg.sound_speed)
         S = two_range_starts(b, n, cfg)
         if cfg.start_pseudolinear:
             ple = pseudolinear(p, n)

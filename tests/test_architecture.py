@@ -7,7 +7,7 @@ Layers point one way (a module imports only from its own layer or lower ones)::
     2  tracking                                    (multi-target tracking)
     3  io                                          (file formats: readers and writers)
     4  simulate, evaluate                          (scenarios, statistics; they use io)
-    5  report
+    5  report, live                                (live: the streaming process)
     6  commands, cli
 
 ``io`` sits below ``simulate`` and ``evaluate``: a file format depends on the estimators'
@@ -52,6 +52,7 @@ LAYERS: dict[str, int] = {
     "simulate": 4,
     "evaluate": 4,
     "report": 5,
+    "live": 5,
     "commands": 6,
     "cli": 6,
 }

@@ -41,6 +41,7 @@ COMMAND_MODULES = [
     "seatrack.commands.track",
     "seatrack.commands.navigate",
     "seatrack.commands.ais",
+    "seatrack.commands.live",
 ]
 
 app = typer.Typer(

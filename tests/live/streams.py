@@ -76,3 +76,41 @@ def synthetic(seed: int = 1, vessels: int = 6, reports: int = 60) -> Reports:
     lat = 57.0 + a[:, 3] / 111_320.0
     lon = 11.0 + a[:, 2] / (111_320.0 * np.cos(np.radians(57.0)))
     return Reports(a[:, 0].astype(np.int64), a[:, 1], lat, lon, a[:, 4], a[:, 5])
+
+
+RADAR_TOML = """lat_deg = 57.70
+lon_deg = 11.85
+sigma_range_m = 15.0
+sigma_azimuth_deg = 0.3
+scan_period_s = 1.0
+scan_timeout_s = 0.3
+"""
+
+
+def radar_scans(seed: int = 0, scans: int = 30, targets: int = 6, clutter: int = 5,  # noqa: E501
+                t0: float = 1.7e9, period: float = 1.0):  # fmt: skip
+    """Synthetic 2-D radar scans: straight-moving targets (detected with probability
+    0.9, range/azimuth noise 15 m / 0.3 deg) plus uniform clutter; a list of
+    ``(t, range_m, azimuth_deg)`` arrays, one per scan."""
+    rng = np.random.default_rng(seed)
+    pos = rng.uniform(-8000, 8000, (targets, 2))
+    vel = rng.uniform(-8, 8, (targets, 2))
+    out = []
+    for k in range(scans):
+        t = t0 + k * period
+        p = pos + vel * k * period
+        det = rng.uniform(size=targets) < 0.9
+        r = np.hypot(p[det, 0], p[det, 1]) + rng.normal(0, 15, det.sum())
+        az = np.degrees(np.arctan2(p[det, 0], p[det, 1])) + rng.normal(0, 0.3, det.sum())
+        r = np.r_[r, rng.uniform(500, 12000, clutter)]
+        az = np.r_[az, rng.uniform(0, 360, clutter)] % 360.0
+        out.append((np.full(r.size, t), r, az))
+    return out
+
+
+def plot_csv(scans, header: bool = True) -> list[str]:
+    """PLOTS.csv lines of scans (6 decimals, as seatrack writes them)."""
+    lines = ["time_s,range_m,azimuth_deg"] if header else []
+    for t, r, az in scans:
+        lines += [f"{a:.6f},{b:.6f},{c:.6f}" for a, b, c in zip(t, r, az, strict=True)]
+    return lines

@@ -94,6 +94,8 @@ def register(app: typer.Typer) -> None:
         if not ais and not plots:
             raise InputError("give at least one --ais or --plots source")
         radar = None
+        if any(s.startswith("tcp://") for s in plots):
+            raise InputError("--plots: udp://HOST:PORT or a file (plots do not come over TCP)")
         if plots:
             if config is None:
                 raise InputError("--plots needs --config radar.toml (the radar's position)")

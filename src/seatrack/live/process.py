@@ -94,7 +94,8 @@ class LiveProcess:
         for c in chunks:
             if c.kind == "plots":
                 if self.radar is not None:
-                    self.radar.datagram(b"\n".join(c.lines), c.received_s, c.perf_s)
+                    for data in c.lines:
+                        self.radar.datagram(data, c.received_s, c.perf_s)
                 continue
             for line in c.lines:
                 messages.extend(self.assembler.push(line, c.source, c.received_s, c.perf_s))
@@ -172,7 +173,7 @@ class LiveProcess:
         """Update the picture from the trackers and hand the changes to the listeners."""
         self.picture.refresh_ais(self.ais, self.names)
         if self.radar is not None and self.radar.changed:
-            self.picture.set_radar(self.radar.views())
+            self.picture.set_radar(self.radar.current)
             self.radar.changed = False
         changes = self.picture.take_changes()
         if changes is not None:

@@ -1,12 +1,13 @@
 """Stream sources of the live process: ``udp://HOST:PORT`` (datagrams), ``tcp://HOST:PORT``
 (a client that reconnects with backoff) and a FILE (read once).
 
-Each source puts :class:`Chunk` items (the source's name, its lines, the receipt time as
-Unix seconds and as ``time.perf_counter()``) on a bounded asyncio queue. A TCP or FILE
-source waits when the queue is full (back-pressure); a UDP datagram cannot wait, so one
-that arrives on a full queue is handed to ``on_overflow`` (the process counts its lines as
-rejected, ``"queue full"``). Lines split across TCP reads are joined (the stream is read
-line by line).
+AIS sources are split into lines; plot sources (``kind="plots"``) are UDP datagrams or a
+FILE, each passed whole (binary CAT048 or CSV text). Each source puts :class:`Chunk` items
+(the source's name, its lines, the receipt time as Unix seconds and as
+``time.perf_counter()``) on a bounded asyncio queue. A TCP or FILE source waits when the
+queue is full (back-pressure); a UDP datagram cannot wait, so one that arrives on a full
+queue is handed to ``on_overflow`` (the process counts its lines as rejected, ``"queue
+full"``). Lines split across TCP reads are joined.
 """
 
 from __future__ import annotations
@@ -79,7 +80,8 @@ class _Udp(asyncio.DatagramProtocol):
         self.name, self.kind, self.queue, self.overflow = name, kind, queue, overflow
 
     def datagram_received(self, data: bytes, addr: object) -> None:
-        chunk = Chunk(self.name, data.splitlines(), time.time(), time.perf_counter(), self.kind)
+        lines = data.splitlines() if self.kind == "ais" else [data]  # plots: binary, whole
+        chunk = Chunk(self.name, lines, time.time(), time.perf_counter(), self.kind)
         try:
             self.queue.put_nowait(chunk)
         except asyncio.QueueFull:
@@ -151,8 +153,13 @@ async def run_tcp(
 
 
 async def run_file(src: Source, queue: asyncio.Queue, kind: str = "ais", block: int = 512) -> None:
-    """Put a file's lines on the queue (blocks of ``block`` lines) and return."""
+    """Put a file's lines on the queue (blocks of ``block`` lines) and return; a plot
+    file (CSV or CAT048) goes whole, as one datagram."""
     assert src.path is not None
+    if kind == "plots":
+        data = src.path.read_bytes()
+        await queue.put(Chunk(src.name, [data], time.time(), time.perf_counter(), kind))
+        return
     with open(src.path, "rb") as f:
         lines: list[bytes] = []
         for line in f:

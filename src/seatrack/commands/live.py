@@ -27,17 +27,27 @@ async def run_live(opts: Any, echo: Any = print) -> bool:
     """Run the live process; True if it was stopped by a signal."""
     from seatrack.live.process import LiveProcess
 
-    proc = LiveProcess(opts)
     stop = asyncio.Event()
     loop = asyncio.get_running_loop()
     for sig in (signal.SIGINT, signal.SIGTERM):
         loop.add_signal_handler(sig, stop.set)
+    try:
+        proc = LiveProcess(opts)
+    except BaseException:
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            loop.remove_signal_handler(sig)
+        raise
     services: list[Any] = []
     interrupted = False
     try:
+        if proc.store is not None:
+            echo(f"store {proc.store.path}: {proc.restored} track(s) restored")
         files = await proc.start()
-        for src in [*opts.ais, *opts.plots]:
-            echo(f"reading {src.name}")
+        ports = iter(proc.udp_ports)
+        for kind, sources in (("ais", opts.ais), ("plots", opts.plots)):
+            for src in sources:
+                name = f"udp://{src.host}:{next(ports)}" if src.kind == "udp" else src.name
+                echo(f"{kind}: reading {name}")
         if opts.http is not None:
             from seatrack.live.web import start_web
 
@@ -80,6 +90,9 @@ def register(app: typer.Typer) -> None:
         ),
         config: Path | None = typer.Option(None, "--config", help="radar.toml (radar plots)"),
         http: str | None = typer.Option(None, "--http", help="serve the map and API: HOST:PORT"),
+        store: Path | None = typer.Option(
+            None, "--store", help="DuckDB file: every report and track point; restart from it"
+        ),
         window: float = typer.Option(
             10.0, "--window", help="out-of-order window per vessel, s (older reports: late)"
         ),
@@ -108,6 +121,11 @@ def register(app: typer.Typer) -> None:
             radar=radar,
             http=None if http is None else parse_hostport(http, "--http"),
             window_s=window,
+            store=store,
         )
+        if store is not None:
+            from seatrack.commands.options import prepare_outputs
+
+            prepare_outputs(folders=[store.parent if str(store.parent) else Path(".")])
         if asyncio.run(run_live(opts, typer.echo)):
             raise typer.Abort()

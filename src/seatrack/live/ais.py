@@ -14,7 +14,8 @@ Ordering. Each vessel keeps the reports of its last ``window_s`` seconds (messag
 with the filter state before each. A report at or after the vessel's latest time is
 filtered at once; an earlier one within the window is inserted in time order and the
 vessel re-run from the state before it (the picture then equals the one of the reports
-in time order); an older one is ``late`` and not used. Each vessel's tangent plane is
+in time order); an older one is ``late`` and not used (so is an earlier one right after
+a restart from the store, whose windows start empty). Each vessel's tangent plane is
 centred on its first report (as the batch tracker's, in time order).
 """
 
@@ -99,6 +100,16 @@ class Estimate:
     segment: int
     nis: float
 
+    def numbers(self) -> list[float]:
+        """The estimate as numbers (the store's ``estimate`` column)."""
+        return [self.t, *self.state.tolist(), *self.std.tolist(), self.kind, self.segment,
+                self.nis]  # fmt: skip
+
+    @classmethod
+    def from_numbers(cls, v: list[float]) -> Estimate:
+        a = np.asarray(v, dtype=float)
+        return cls(float(a[0]), a[1:6].copy(), a[6:11].copy(), int(a[11]), int(a[12]), float(a[13]))
+
 
 class _Scratch:
     """Work arrays shared by all vessels (one process, one thread)."""
@@ -140,6 +151,27 @@ class _State:
 
     def copy(self) -> _State:
         return replace(self, x=self.x.copy(), P=self.P.copy())
+
+    def numbers(self) -> list[float]:
+        """The state as numbers (the store's ``filter`` column)."""
+        head = [float(getattr(self, f)) for f in _SCALARS]
+        return head + self.x.tolist() + self.P.ravel().tolist()
+
+    @classmethod
+    def from_numbers(cls, v: list[float]) -> _State:
+        n = len(_SCALARS)
+        kw: dict[str, Any] = {f: v[k] for k, f in enumerate(_SCALARS)}
+        kw["init"] = bool(kw["init"])
+        kw["segment"], kw["n_out"] = int(kw["segment"]), int(kw["n_out"])
+        x = np.array(v[n : n + NX])
+        P = np.array(v[n + NX : n + NX + NX * NX]).reshape(NX, NX)
+        return cls(**kw, x=x, P=P)
+
+
+_SCALARS = (
+    "init", "segment", "t_state", "last_t", "last_x", "last_y", "prev_t", "prev_x", "prev_y",
+    "run_t", "n_out", "sog_t", "sog_last",
+)  # fmt: skip
 
 
 class VesselFilter:
@@ -295,17 +327,20 @@ class _Vessel:
         self.estimate: Estimate | None = None
         self.report: AisReport | None = None
         self.name = ""
+        self.t_restored = -math.inf  # latest report time before a restart
 
     @property
     def last_t(self) -> float:
-        return self.times[-1] if self.times else -math.inf
+        return self.times[-1] if self.times else self.t_restored
 
-    def run(self, r: AisReport) -> Estimate | None:
+    def run(self, r: AisReport, emitted: list | None) -> Estimate | None:
         self.history.append(_Entry(r, self.filter.snapshot()))
         self.times.append(r.t)
         est = self.filter.step(r)
         if est is not None:
             self.estimate, self.report = est, r
+            if emitted is not None:
+                emitted.append((self, est))
         return est
 
     def prune(self, window_s: float) -> None:
@@ -346,7 +381,9 @@ class LiveAis:
         self.par = kernel_params(self.config)
         self.window_s = float(window_s)
         self.vessels: dict[int, _Vessel] = {}
-        self.changed: set[int] = set()
+        self.changed: set[int] = set()  # since the picture's last refresh
+        self.dirty: set[int] = set()  # since the store's last commit
+        self.emitted: list | None = None  # (vessel, estimate) of every step, when a list
 
     def add(
         self, mmsi: NDArray[np.int64], t: FloatArray, lat: FloatArray, lon: FloatArray,
@@ -376,20 +413,20 @@ class LiveAis:
         """One report in its vessel's plane; False if late (not used)."""
         v = self.vessels[r.mmsi]
         if r.t >= v.last_t:
-            v.run(r)
-        elif r.t >= v.last_t - self.window_s:
+            v.run(r, self.emitted)
+        elif r.t >= v.last_t - self.window_s and v.times:
             k = bisect.bisect_right(v.times, r.t)
             redo = v.history[k:]
             v.filter.restore(redo[0].before)
             del v.history[k:]
             del v.times[k:]
-            v.estimate = None
             for e in [_Entry(r, redo[0].before), *redo]:
-                v.run(e.report)
+                v.run(e.report, self.emitted)
         else:
             return False
         v.prune(self.window_s)
         self.changed.add(r.mmsi)
+        self.dirty.add(r.mmsi)
         return True
 
     def tracks(self, mmsis: list[int] | None = None) -> tuple[list[int], AisTracks, FloatArray]:
@@ -414,8 +451,20 @@ class LiveAis:
         st = TrackStates(state, std, kind > 0, kind, seg, nis, np.zeros(n))
         return ids, tracks_from_states(planes, st), t
 
-    def restore_vessel(self, mmsi: int, lat0: float, lon0: float, name: str = "") -> Any:
-        """A vessel with its plane origin (restart from the store); returns it."""
-        v = self.vessels[mmsi] = _Vessel(mmsi, lat0, lon0, self.par)
-        v.name = name
-        return v
+    def state_row(self, mmsi: int) -> tuple:
+        """``(mmsi, lat0, lon0, name, t_last, filter numbers, estimate numbers | None)``."""
+        v = self.vessels[mmsi]
+        est = None if v.estimate is None else v.estimate.numbers()
+        return (mmsi, v.lat0, v.lon0, v.name, v.last_t, v.filter.s.numbers(), est)
+
+    def restore_vessel(self, row: tuple) -> None:
+        """A vessel from :meth:`state_row` (a restart): its filter goes on from that state;
+        its out-of-order window starts empty."""
+        mmsi, lat0, lon0, name, t_last, numbers, est = row
+        v = self.vessels[int(mmsi)] = _Vessel(int(mmsi), lat0, lon0, self.par)
+        v.name = name or ""
+        v.t_restored = float(t_last)
+        v.filter.s = _State.from_numbers(list(numbers))
+        v.estimate = None if est is None else Estimate.from_numbers(list(est))
+        if v.estimate is not None:
+            self.changed.add(int(mmsi))

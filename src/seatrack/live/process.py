@@ -54,6 +54,7 @@ class LiveOptions:
     window_s: float = 10.0
     queue_size: int = 4096
     tick_s: float = 0.25
+    commit_s: float = 0.5
     ais_config: Any = None
 
 
@@ -75,10 +76,46 @@ class LiveProcess:
 
             self.radar = LiveRadar(opts.radar, self.counters)
         self.listeners: list[Any] = []  # callables fed the picture changes
+        self.store: Any = None
+        self.writer: Any = None
+        self.restored = 0
+        self._closing = asyncio.Event()
+        if opts.store is not None:
+            self._open_store(opts.store)
         self.http_port: int | None = None
         self._transports: list[Any] = []
         self.udp_ports: list[int] = []  # bound ports of the UDP sources, in order
+        self._store_task: asyncio.Task | None = None
         self._tasks: list[asyncio.Task] = []
+
+    def _open_store(self, path: Path) -> None:
+        from seatrack.live.store import Store
+        from seatrack.live.store import StoreWriter
+
+        self.store = Store(path)
+        self.writer = StoreWriter(self.store)
+        self.ais.emitted = []
+        self.restored = self.writer.restore(self.ais, self.radar, self.counters)
+        self.names.update({m: v.name for m, v in self.ais.vessels.items() if v.name})
+        if self.radar is not None:
+            self.radar.on_scan.append(self.writer.radar_scan)
+
+    async def commit(self) -> None:
+        """Write what was gathered since the last commit (in a worker thread)."""
+        for m in self.ais.dirty:
+            self.ais.vessels[m].name = self.names.get(m, "")
+        batch = self.writer.take(self.ais, self.radar, self.counters)
+        await asyncio.to_thread(self.store.commit, batch)
+
+    async def store_loop(self) -> None:
+        """Commit every ``commit_s`` seconds, and once more when the process stops."""
+        while True:
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._closing.wait(), self.opts.commit_s)
+            closing = self._closing.is_set()  # set during the commit: one more
+            await self.commit()
+            if closing:
+                return
 
     # ---- AIS ------------------------------------------------------------------------------
     def overflow(self, chunk: Chunk) -> None:
@@ -123,8 +160,11 @@ class LiveProcess:
             elif d.is_position:
                 pos.append((d, m))
             else:
-                if d.name:
+                if d.name and self.names.get(d.mmsi) != d.name:
                     self.names[d.mmsi] = d.name
+                    if d.mmsi in self.ais.vessels:
+                        self.ais.dirty.add(d.mmsi)
+                        self.ais.changed.add(d.mmsi)
                 cnt.received += 1
                 cnt.decoded += 1
         if not pos:
@@ -142,8 +182,11 @@ class LiveProcess:
         cnt.late += len(pos) - n_used
         now = time.perf_counter()
         cnt.latency.add([now - m.perf_s for (_, m), u in zip(pos, used, strict=True) if u])
-        for fn in self.listeners:
-            fn("ais", [(d, m) for (d, m), u in zip(pos, used, strict=True) if u])
+        if self.writer is not None:
+            self.writer.ais_reports([
+                (d.mmsi, m.time_s, d.lat, d.lon, d.sog_kn, d.cog_deg, m.source, m.received_s)
+                for (d, m), u in zip(pos, used, strict=True) if u
+            ])  # fmt: skip
 
     async def consume(self) -> None:
         """The consumer task: chunks off the queue, in bursts."""
@@ -187,6 +230,9 @@ class LiveProcess:
         h["radar_tracks"] = 0 if self.radar is None else self.radar.n_tracks
         h["pending_fragments"] = self.assembler.pending
         h["queue"] = self.queue.qsize()
+        if self.store is not None:
+            h["store"] = {"path": str(self.store.path), "commits": self.store.commits,
+                          "committed_rows": self.store.committed_rows}  # fmt: skip
         return h
 
     # ---- running --------------------------------------------------------------------------
@@ -199,6 +245,8 @@ class LiveProcess:
 
         self._tasks.append(asyncio.create_task(self.consume()))
         self._tasks.append(asyncio.create_task(self.tick()))
+        if self.store is not None:
+            self._store_task = asyncio.create_task(self.store_loop())
         files = []
         for kind, sources in (("ais", self.opts.ais), ("plots", self.opts.plots)):
             for src in sources:
@@ -232,3 +280,11 @@ class LiveProcess:
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await t
         self._tasks.clear()
+        if self.store is not None:
+            self._closing.set()
+            if self._store_task is not None:
+                await self._store_task  # the last commit
+            else:
+                await self.commit()
+            self.store.close()
+            self.store = None

@@ -135,7 +135,10 @@ class LiveRadar:
         self.last_t = -math.inf
         self.changed = False
         self.current: list[RadarTrackView] = []
+        self.scan_plots: tuple[float, FloatArray, FloatArray] = (0.0, np.zeros(0), np.zeros(0))
+        self.scan_rows: list[tuple] = []  # per current track: x, y, vx, vy (m, m/s), status
         self.listeners: list[Any] = []  # fn(t, ids, status, columns) after each scan
+        self.on_scan: list[Any] = []  # fn(self) after each scan
 
     @property
     def n_tracks(self) -> int:
@@ -188,11 +191,19 @@ class LiveRadar:
         shown = np.flatnonzero(res.status != int(TrackStatus.TENTATIVE))
         cols = self.scans.columns(res.state.take(shown)) if shown.size else {}
         self.current = self.views(t, res.track[shown], res.status[shown], cols)
+        self.scan_plots = (t, rng, az)
+        self.scan_rows = [
+            (cols["x_m"][k], cols["y_m"][k], cols["vx_mps"][k], cols["vy_mps"][k],
+             TrackStatus(int(res.status[shown][k])).label)
+            for k in range(shown.size)
+        ]  # fmt: skip
         self.counters.scans += 1
         self.counters.scan_latency.add(time.perf_counter() - t0)
         self.changed = True
         for fn in self.listeners:
             fn(t, res.track[shown], res.status[shown], cols)
+        for hook in self.on_scan:
+            hook(self)
 
     def views(
         self, t: float, ids: NDArray[np.int64], status: NDArray[Any], cols: dict[str, Any]

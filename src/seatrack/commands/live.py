@@ -77,6 +77,14 @@ async def run_live(opts: Any, echo: Any = print) -> bool:
     return interrupted
 
 
+def _udp_target(text: str) -> tuple[str, int]:
+    from seatrack.live.sources import parse_hostport
+
+    if not text.startswith("udp://"):
+        raise InputError(f"--nmea-out: expected udp://HOST:PORT, got {text!r}")
+    return parse_hostport(text[len("udp://") :], "--nmea-out")
+
+
 def register(app: typer.Typer) -> None:
     """Add the ``live`` sub-command to ``app``."""
 
@@ -90,6 +98,9 @@ def register(app: typer.Typer) -> None:
         ),
         config: Path | None = typer.Option(None, "--config", help="radar.toml (radar plots)"),
         http: str | None = typer.Option(None, "--http", help="serve the map and API: HOST:PORT"),
+        nmea_out: str | None = typer.Option(
+            None, "--nmea-out", help="send radar tracks as NMEA TTM/TLL to udp://HOST:PORT"
+        ),
         store: Path | None = typer.Option(
             None, "--store", help="DuckDB file: every report and track point; restart from it"
         ),
@@ -122,6 +133,7 @@ def register(app: typer.Typer) -> None:
             http=None if http is None else parse_hostport(http, "--http"),
             window_s=window,
             store=store,
+            nmea_out=None if nmea_out is None else _udp_target(nmea_out),
         )
         if store is not None:
             from seatrack.commands.options import prepare_outputs

@@ -60,6 +60,7 @@ class Counters:
         self.scans = 0
         self.display_drops = 0
         self.reconnects = 0
+        self.nmea_out_errors = 0
         self.latency = Latency()
         self.scan_latency = Latency(2_000)
 
@@ -91,4 +92,5 @@ class Counters:
             },
             "display_drops": self.display_drops,
             "reconnects": self.reconnects,
+            "nmea_out_errors": self.nmea_out_errors,
         }

@@ -82,6 +82,12 @@ class LiveProcess:
         self._closing = asyncio.Event()
         if opts.store is not None:
             self._open_store(opts.store)
+        self.nmea_out: Any = None
+        if opts.nmea_out is not None and self.radar is not None:
+            from seatrack.live.nmea_out import NmeaOut
+
+            self.nmea_out = NmeaOut(*opts.nmea_out, self.counters)
+            self.radar.on_scan.append(self.nmea_out.scan)
         self.http_port: int | None = None
         self._transports: list[Any] = []
         self.udp_ports: list[int] = []  # bound ports of the UDP sources, in order
@@ -280,6 +286,8 @@ class LiveProcess:
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await t
         self._tasks.clear()
+        if self.nmea_out is not None:
+            self.nmea_out.close()
         if self.store is not None:
             self._closing.set()
             if self._store_task is not None:

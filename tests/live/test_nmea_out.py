@@ -9,17 +9,16 @@ import socket
 import numpy as np
 import pynmea2
 
-from seatrack.io.radar import parse_radar_config
-from seatrack.live.nmea_out import tll
-from seatrack.live.nmea_out import ttm
-from seatrack.live.process import LiveOptions
-from seatrack.live.sources import Source
-
 from live.streams import plot_csv
 from live.streams import radar_scans
 from live.streams import started
 from live.streams import udp_send
 from live.streams import wait_for
+from seatrack.io.radar import parse_radar_config
+from seatrack.live.nmea_out import tll
+from seatrack.live.nmea_out import ttm
+from seatrack.live.process import LiveOptions
+from seatrack.live.sources import Source
 
 
 def test_ttm_and_tll_fields():

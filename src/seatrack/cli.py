@@ -42,6 +42,7 @@ COMMAND_MODULES = [
     "seatrack.commands.navigate",
     "seatrack.commands.ais",
     "seatrack.commands.live",
+    "seatrack.commands.replay",
 ]
 
 app = typer.Typer(

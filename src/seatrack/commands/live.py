@@ -77,14 +77,6 @@ async def run_live(opts: Any, echo: Any = print) -> bool:
     return interrupted
 
 
-def _udp_target(text: str) -> tuple[str, int]:
-    from seatrack.live.sources import parse_hostport
-
-    if not text.startswith("udp://"):
-        raise InputError(f"--nmea-out: expected udp://HOST:PORT, got {text!r}")
-    return parse_hostport(text[len("udp://") :], "--nmea-out")
-
-
 def register(app: typer.Typer) -> None:
     """Add the ``live`` sub-command to ``app``."""
 
@@ -110,6 +102,7 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Track live AIS (and radar) streams: a map, a JSON API and counters."""
         from seatrack.commands.options import option_in
+        from seatrack.commands.replay import udp_target
         from seatrack.live.process import LiveOptions
         from seatrack.live.sources import parse_hostport
         from seatrack.live.sources import parse_source
@@ -133,7 +126,7 @@ def register(app: typer.Typer) -> None:
             http=None if http is None else parse_hostport(http, "--http"),
             window_s=window,
             store=store,
-            nmea_out=None if nmea_out is None else _udp_target(nmea_out),
+            nmea_out=None if nmea_out is None else udp_target(nmea_out, "--nmea-out"),
         )
         if store is not None:
             from seatrack.commands.options import prepare_outputs

@@ -25,6 +25,7 @@ import math
 import struct
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -34,7 +35,10 @@ from seatrack.io.table import InputError
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["Cat048", "AsterixError", "decode_cat048", "encode_cat048", "read_cat048", "NM_M"]
+__all__ = [
+    "Cat048", "AsterixError", "cat048_plots", "decode_cat048", "encode_cat048", "read_cat048",
+    "NM_M",
+]  # fmt: skip
 
 NM_M = 1852.0
 CAT = 48
@@ -257,3 +261,27 @@ def read_cat048(path: str | Path) -> Cat048:
         return decode_cat048(Path(path).read_bytes(), str(path))
     except AsterixError as exc:
         raise InputError(str(exc)) from None
+
+
+def cat048_plots(c: Cat048, where: str = "data") -> Any:
+    """:class:`~seatrack.filters.base.Plots` of target reports (2-D: range, azimuth; the
+    sensor at the origin): ``t`` = time of day (s), unwrapped across midnight (a step back
+    of more than 12 h is the next day); ``line`` = the record's number (1, 2, ...).
+
+    Raises
+    ------
+    InputError
+        A record without time of day, or times going back.
+    """
+    from seatrack.filters.base import Plots
+
+    t = c.time_of_day_s.copy()
+    if np.isnan(t).any():
+        k = int(np.flatnonzero(np.isnan(t))[0]) + 1
+        raise InputError(f"{where}, record {k}: no time of day (I048/140)")
+    day = np.cumsum(np.r_[0.0, np.diff(t) < -DAY_S / 2]) * DAY_S
+    t = t + day
+    back = np.flatnonzero(np.diff(t) < 0)
+    if back.size:
+        raise InputError(f"{where}, record {back[0] + 2}: time of day goes back")
+    return Plots(t, c.range_m, c.azimuth, line=np.arange(1, t.size + 1, dtype=np.int64))

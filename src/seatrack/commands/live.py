@@ -23,8 +23,9 @@ from seatrack.io.table import InputError
 __all__ = ["register", "run_live"]
 
 
-async def run_live(opts: Any, echo: Any = print) -> bool:
-    """Run the live process; True if it was stopped by a signal."""
+async def run_live(opts: Any, echo: Any = print, on_start: Any = None) -> bool:
+    """Run the live process; True if it was stopped by a signal. ``on_start(proc)`` is
+    called once the sources and the web server are up."""
     from seatrack.live.process import LiveProcess
 
     stop = asyncio.Event()
@@ -41,7 +42,8 @@ async def run_live(opts: Any, echo: Any = print) -> bool:
     interrupted = False
     try:
         if proc.store is not None:
-            echo(f"store {proc.store.path}: {proc.restored} track(s) restored")
+            echo(f"store {proc.store.path}: {proc.restored} track(s) restored "
+                 f"in {proc.restore_s:.3f} s")  # fmt: skip
         files = await proc.start()
         ports = iter(proc.udp_ports)
         for kind, sources in (("ais", opts.ais), ("plots", opts.plots)):
@@ -53,6 +55,8 @@ async def run_live(opts: Any, echo: Any = print) -> bool:
 
             services.append(await start_web(proc, *opts.http))
             echo(f"map at http://{opts.http[0]}:{proc.http_port}/")
+        if on_start is not None:
+            on_start(proc)
         only_files = all(s.kind == "file" for s in [*opts.ais, *opts.plots])
         if only_files and opts.http is None:
             waiter = asyncio.create_task(stop.wait())

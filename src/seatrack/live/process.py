@@ -79,6 +79,7 @@ class LiveProcess:
         self.store: Any = None
         self.writer: Any = None
         self.restored = 0
+        self.restore_s = 0.0
         self._closing = asyncio.Event()
         if opts.store is not None:
             self._open_store(opts.store)
@@ -98,10 +99,12 @@ class LiveProcess:
         from seatrack.live.store import Store
         from seatrack.live.store import StoreWriter
 
+        t0 = time.perf_counter()
         self.store = Store(path)
         self.writer = StoreWriter(self.store)
         self.ais.emitted = []
         self.restored = self.writer.restore(self.ais, self.radar, self.counters)
+        self.restore_s = time.perf_counter() - t0
         self.names.update({m: v.name for m, v in self.ais.vessels.items() if v.name})
         if self.radar is not None:
             self.radar.on_scan.append(self.writer.radar_scan)

@@ -76,6 +76,7 @@ class LiveProcess:
 
             self.radar = LiveRadar(opts.radar, self.counters)
         self.listeners: list[Any] = []  # callables fed the picture changes
+        self.viewers: list[Any] = []  # callables: True while someone watches the picture
         self.store: Any = None
         self.writer: Any = None
         self.restored = 0
@@ -211,15 +212,18 @@ class LiveProcess:
                 self.queue.task_done()
 
     async def tick(self) -> None:
-        """Close timed-out scans and fragments; refresh the picture; feed the outputs."""
+        """Close timed-out scans (once the queue is read) and fragments; refresh the
+        picture while someone watches it (the trackers are always current: the GeoJSON
+        view is computed for the viewers)."""
         while True:
             await asyncio.sleep(self.opts.tick_s)
             expired = self.assembler.expire(time.time())
             if expired:
                 self.handle_messages(expired)
-            if self.radar is not None:
+            if self.radar is not None and self.queue.empty():  # caught up: nothing to read
                 self.radar.timeout(time.time())
-            self.refresh()
+            if any(wants() for wants in self.viewers):
+                self.refresh()
 
     def refresh(self) -> None:
         """Update the picture from the trackers and hand the changes to the listeners."""

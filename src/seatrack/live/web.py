@@ -87,6 +87,7 @@ def make_app(proc: Any) -> web.Application:
                 c.resync = True
 
     proc.listeners.append(listener)
+    proc.viewers.append(lambda: bool(clients))
 
     async def index(_: web.Request) -> web.Response:
         return web.Response(body=_asset("seatrack.live", "assets", "live.html"),
@@ -104,6 +105,7 @@ def make_app(proc: Any) -> web.Application:
         return web.Response(body=body, content_type=_TYPES.get(ext, "application/octet-stream"))
 
     async def tracks(_: web.Request) -> web.Response:
+        proc.refresh()
         return web.json_response(proc.picture.collection())
 
     async def health(_: web.Request) -> web.Response:
@@ -116,6 +118,7 @@ def make_app(proc: Any) -> web.Application:
         ws = web.WebSocketResponse(heartbeat=10.0)
         await ws.prepare(request)
         client = _Client(ws)
+        proc.refresh()
         full = {**proc.picture.collection(), "full": True}
         client.queue.put_nowait(json.dumps(full))
         clients.add(client)

@@ -6,8 +6,8 @@ from __future__ import annotations
 import json
 
 import pytest
-from cli_inprocess import seatrack
 
+from cli_inprocess import seatrack
 from seatrack.live.nmea import encode_report
 
 

@@ -11,8 +11,9 @@ Scans. Plots of one time form a scan; the scan closes when a plot of a later tim
 arrives or, once every datagram received is processed, ``scan_timeout_s`` (receipt time)
 after its first plot, and is then handed to the tracker. A plot older than the open scan
 (or of a closed scan) is rejected (``"late plot"``). The tracker is the one of
-``seatrack track`` on unlabelled plots: the per-track filter ``method`` with the automatic process noise for ``scan_period_s``
-(:func:`seatrack.tracking.auto.per_track_filter`) inside
+``seatrack track`` on unlabelled plots: the per-track filter ``method`` with the
+automatic process noise for ``scan_period_s`` (:func:`seatrack.tracking.auto.per_track_filter`)
+inside
 :class:`~seatrack.tracking.MultiTargetTracker`, stepped scan by scan through
 :class:`ScanTracker` (the one place that calls it).
 """

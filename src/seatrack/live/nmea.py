@@ -209,25 +209,59 @@ class Decoded:
         return self.msg_type in POSITION_TYPES
 
 
-def decode_message(sentences: list[bytes]) -> Decoded | str:
-    """Decode a complete message with pyais; the reject reason (a label of
-    :data:`seatrack.io.ais.REJECT_REASONS`) when it cannot be used."""
-    from pyais.exceptions import AISBaseException
-    from pyais.messages import AISSentence
-    from pyais.messages import NMEASentenceFactory
+#: 6-bit value of each armoured payload character (ITU-R M.1371 / IEC 61162-1)
+_SIXBIT = {c: (c - 48 if c < 88 else c - 56) for c in range(48, 120)}
 
-    try:
-        parts = [NMEASentenceFactory.produce(b) for b in sentences]
-        msg: Any = AISSentence.assemble_from_iterable(parts).decode()  # type: ignore[arg-type]
-        mtype, mmsi = int(msg.msg_type), int(msg.mmsi)
-    except (AISBaseException, ValueError, IndexError, TypeError, AttributeError):
-        return "undecodable message"
+
+def _class_a(sentence: bytes) -> tuple[int, int, float, float, float, float] | None:
+    """``(type, mmsi, lat, lon, sog, cog)`` of a one-sentence type 1-3 report of 168 bits
+    (the usual case), with pyais's scalings bit for bit (``lat = round(v * 5 / 3) / 1e6``
+    in integers, SOG and COG ``v / 10``); None for anything else (pyais decodes it)."""
+    fields = sentence.split(b",")
+    payload = fields[5]
+    if len(payload) != 28 or payload[:1] not in (b"1", b"2", b"3") or fields[6][:1] != b"0":
+        return None
+    v = 0
+    for c in payload:
+        d = _SIXBIT.get(c)
+        if d is None:
+            return None
+        v = (v << 6) | d
+    lon = (v >> 79) & 0xFFFFFFF
+    lon = lon - 0x10000000 if lon & 0x8000000 else lon
+    lat = (v >> 52) & 0x7FFFFFF
+    lat = lat - 0x8000000 if lat & 0x4000000 else lat
+    lat_deg, lon_deg = ((10 * lat + 3) // 6) / 1e6, ((10 * lon + 3) // 6) / 1e6
+    sog, cog = ((v >> 108) & 1023) / 10.0, ((v >> 40) & 4095) / 10.0
+    return v >> 162, (v >> 130) & 0x3FFFFFFF, lat_deg, lon_deg, sog, cog
+
+
+def decode_message(sentences: list[bytes]) -> Decoded | str:
+    """Decode a complete message (class A position reports directly, everything else with
+    pyais); the reject reason (a label of :data:`seatrack.io.ais.REJECT_REASONS`) when it
+    cannot be used."""
+    fast = _class_a(sentences[0]) if len(sentences) == 1 else None
+    if fast is not None:
+        mtype, mmsi, lat, lon, sog, cog = fast
+    else:
+        from pyais.exceptions import AISBaseException
+        from pyais.messages import AISSentence
+        from pyais.messages import NMEASentenceFactory
+
+        try:
+            parts = [NMEASentenceFactory.produce(b) for b in sentences]
+            msg: Any = AISSentence.assemble_from_iterable(parts).decode()  # type: ignore[arg-type]
+            mtype, mmsi = int(msg.msg_type), int(msg.mmsi)
+        except (AISBaseException, ValueError, IndexError, TypeError, AttributeError):
+            return "undecodable message"
+        if mtype in POSITION_TYPES:
+            lat, lon = float(msg.lat), float(msg.lon)
+            sog, cog = float(msg.speed), float(msg.course)
     if not 0 < mmsi <= MMSI_MAX:
         return "invalid mmsi"
     if mtype not in POSITION_TYPES:
         name = str(getattr(msg, "shipname", "") or "").strip(" @")
         return Decoded(mtype, mmsi, name=name)
-    lat, lon = float(msg.lat), float(msg.lon)
     if lat == 91.0:
         return "lat not available (91)"
     if lon == 181.0:
@@ -236,7 +270,6 @@ def decode_message(sentences: list[bytes]) -> Decoded | str:
         return "lat out of range"
     if not abs(lon) <= 180.0:
         return "lon out of range"
-    sog, cog = float(msg.speed), float(msg.course)
     if mtype == 27 and sog >= 63:  # 6-bit knots (63 = n/a)
         sog = float("nan")
     if not 0 <= sog < SOG_NOT_AVAILABLE_KN - 1e-9:

@@ -138,7 +138,7 @@ lon_deg = 11.0
 sigma_range_m = 20.0
 sigma_azimuth_deg = 0.3
 scan_period_s = 1.0
-scan_timeout_s = 0.5
+scan_timeout_s = 2.0
 """
 
 

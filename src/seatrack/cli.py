@@ -44,6 +44,8 @@ COMMAND_MODULES = [
     "seatrack.commands.track",
     "seatrack.commands.navigate",
     "seatrack.commands.ais",
+    "seatrack.commands.live",
+    "seatrack.commands.replay",
 ]
 
 app = typer.Typer(

@@ -49,6 +49,14 @@ def test_defaults_apart_from_the_position() -> None:
     assert setup.site.max_range == 40000.0
     assert setup.site.blind_sectors == ()
     assert setup.site.method == "ekf"
+    assert setup.site.scan_period == 2.5
+
+
+def test_scan_period_key() -> None:
+    setup = parse_radar_config({"lat_deg": 1.0, "lon_deg": 2.0, "scan_period_s": 1.0})
+    assert setup.site.scan_period == 1.0
+    with pytest.raises(ConfigError, match="scan_period_s"):
+        parse_radar_config({"lat_deg": 1.0, "lon_deg": 2.0, "scan_period_s": 0.0})
 
 
 @pytest.mark.parametrize(

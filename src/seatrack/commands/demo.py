@@ -83,6 +83,37 @@ def run_demo(out: Path, runs: int | None, processes: int) -> str:
     return text
 
 
+def _live_demo(http: str, speed: float) -> None:
+    """``seatrack demo --live``: :mod:`seatrack.live.demo` into a live process."""
+    import asyncio
+    import threading
+
+    from seatrack.commands.live import run_live
+    from seatrack.commands.options import option_positive
+    from seatrack.live.demo import radar_setup
+    from seatrack.live.demo import start_replay
+    from seatrack.live.process import LiveOptions
+    from seatrack.live.sources import Source
+    from seatrack.live.sources import parse_hostport
+
+    option_positive("--speed", speed, 1e6)
+    udp = Source("udp", "127.0.0.1", 0)
+    opts = LiveOptions(ais=[udp], plots=[udp], radar=radar_setup(),
+                       http=parse_hostport(http, "--http"))  # fmt: skip
+    stop = threading.Event()
+
+    def started(proc: object) -> None:
+        a, p = proc.udp_ports  # type: ignore[attr-defined]
+        start_replay({"ais": ("127.0.0.1", a), "plots": ("127.0.0.1", p)}, speed, stop)
+
+    try:
+        interrupted = asyncio.run(run_live(opts, typer.echo, on_start=started))
+    finally:
+        stop.set()
+    if interrupted:
+        raise typer.Abort()
+
+
 def register(app: typer.Typer) -> None:
     @app.command("demo")
     def demo(
@@ -95,6 +126,16 @@ def register(app: typer.Typer) -> None:
         processes: int = typer.Option(
             2, "--processes", "-p", help="Situations run in parallel (results do not depend on it)."
         ),
+        live: bool = typer.Option(
+            False,
+            "--live",
+            help="replay a real AIS sample and a simulated radar into "
+            "seatrack live and serve its map (until Ctrl-C)",
+        ),
+        http: str = typer.Option(
+            "127.0.0.1:8080", "--http", help="--live: the map's HOST:PORT (port 0: any free)"
+        ),
+        speed: float = typer.Option(5.0, "--speed", help="--live: times real time"),
     ) -> None:
         """Show every method in the situation it is made for and write a one-page report.
 
@@ -102,8 +143,12 @@ def register(app: typer.Typer) -> None:
         bearings only (TMA), a landmark passage (navigation), AIS cleaning of a bundled
         sample and unlabelled plots (multi-target tracking): an honest comparison with one
         sentence per method on when to use it, printed and written to --out with the plots
-        (report.html, one self-contained page).
+        (report.html, one self-contained page). With --live: the live tracker on a replayed
+        real AIS sample and a simulated radar, with its map (docs/live.md).
         """
+        if live:
+            _live_demo(http, speed)
+            return
         typer.echo(run_demo(out, runs, processes), nl=False)
         typer.echo(
             f"open {out / 'report.html'}; try: seatrack track "

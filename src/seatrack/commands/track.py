@@ -32,7 +32,8 @@ def register(app: typer.Typer) -> None:
         plots_csv: Path = typer.Argument(
             ...,
             help="PLOTS.csv: track, time_s, range_m, azimuth_deg, "
-            "[elevation_deg], [range_rate_mps], [sensor_x_m, sensor_y_m, sensor_z_m]",
+            "[elevation_deg], [range_rate_mps], [sensor_x_m, sensor_y_m, sensor_z_m]; or "
+            "PLOTS.ast (ASTERIX CAT048)",
         ),
         method: str = typer.Option(
             "ekf",

@@ -82,6 +82,8 @@ OPTIONAL = ("elevation_deg", "range_rate_mps", "sensor_x_m", "sensor_y_m", "sens
 def has_track_column(path: str | Path) -> bool:
     """Whether the CSV header of ``path`` has a ``track`` column (a labelled plot file)."""
     p = check_input_file(path, "a CSV file")
+    if p.suffix.lower() == ".ast":  # ASTERIX CAT048: plots without track labels
+        return False
     with p.open("rb") as fh:
         head = fh.read(1 << 16).splitlines()  # LF, CRLF or the old CR alone
     first = head[0] if head else b""
@@ -120,7 +122,15 @@ def read_unlabelled_plots(path: str | Path) -> Plots:
         Naming the file, line and problem: missing columns, empty or non-numeric values,
         range <= 0, azimuth outside [0, 360), elevation outside [-90, 90], times out of
         order, a column filled on some rows only.
+
+    A ``.ast`` file is read as ASTERIX CAT048 (:func:`seatrack.io.asterix.cat048_plots`:
+    time of day, range, azimuth; ``line`` = record number).
     """
+    if Path(path).suffix.lower() == ".ast":
+        from seatrack.io.asterix import cat048_plots
+        from seatrack.io.asterix import read_cat048
+
+        return cat048_plots(read_cat048(path), str(path))
     tab = read_csv_table(path, REQUIRED, OPTIONAL)
     _check_values(tab)
     check_times(tab, "time_s", strict=False)

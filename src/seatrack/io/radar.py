@@ -83,6 +83,12 @@ class RadarSite:
         doc="live: a scan closes when a later time arrives or after this wait", min=0,
         exclusive_min=True, max=3600.0,
     )  # fmt: skip
+    scan_period: float = param(
+        2.5, key="scan_period_s", unit="s",
+        doc="live: antenna revolution period, for the per-track filter's automatic process "
+        "noise (the batch tracker takes the median interval of the file)", min=0,
+        exclusive_min=True, max=3600.0,
+    )  # fmt: skip
     method: str = param("ekf", doc="per-track filter of the multi-target tracker")
 
     def __post_init__(self) -> None:

@@ -32,7 +32,14 @@ import numpy as np
 
 from seatrack.io.ais.reports import parse_times
 
-__all__ = ["POSITION_TYPES", "NmeaRow", "is_nmea_line", "nmea_checksum", "nmea_rows"]
+__all__ = [
+    "POSITION_TYPES",
+    "NmeaRow",
+    "checksum_ok",
+    "is_nmea_line",
+    "nmea_checksum",
+    "nmea_rows",
+]
 
 #: AIS message types that carry a position report
 POSITION_TYPES = frozenset({1, 2, 3, 18, 19, 27})
@@ -46,7 +53,7 @@ def nmea_checksum(body: bytes) -> int:
     return reduce(xor, body, 0)
 
 
-def _check(text: bytes) -> bool:
+def checksum_ok(text: bytes) -> bool:
     """True if ``text`` = ``BODY*HH`` (without the leading delimiter) has a valid checksum."""
     star = text.rfind(b"*")
     if star < 0 or len(text) < star + 3:
@@ -79,7 +86,7 @@ def _time_of(prefix: bytes, tag: bytes | None) -> tuple[float, bool]:
     t = float("nan")
     ok = True
     if tag is not None:
-        ok = _check(tag)
+        ok = checksum_ok(tag)
         body = tag.split(b"*", 1)[0]
         for item in body.split(b","):
             if item.startswith(b"c:"):
@@ -158,7 +165,7 @@ def nmea_rows(items: list[tuple[int, bytes]]) -> tuple[list[NmeaRow], dict[str, 
         if len(fields) < 7 or b"*" not in fields[-1]:
             reject(i, t, "truncated sentence")
             continue
-        if not tag_ok or not _check(rest[1:]):
+        if not tag_ok or not checksum_ok(rest[1:]):
             reject(i, t, "bad checksum")
             continue
         try:

@@ -1,0 +1,142 @@
+"""The current picture: AIS vessels and radar tracks as GeoJSON point features.
+
+Feature properties: ``id`` (``ais:MMSI`` or ``radar:N``), ``source`` (``ais`` | ``radar``),
+``mmsi`` (null for radar), ``time_utc`` (ISO 8601, ms), ``sog_kn``, ``cog_deg`` (true
+North), ``status`` (AIS: ``tracking`` or the outlier kind of the last report; radar:
+``confirmed`` / ``tentative``), ``std_m`` (1-sigma position, m, the root mean square of the
+East and North sigmas), ``name`` (AIS static reports) and ``trail`` (the last positions
+shown, ``[lon, lat]``, oldest first). Geometry: ``Point [lon, lat]``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass
+from datetime import UTC
+from datetime import datetime
+from typing import Any
+
+from seatrack.filters.ais import OUTLIER_KINDS
+from seatrack.geometry import KNOT_MPS
+from seatrack.geometry import bearing_rad_to_deg
+
+__all__ = ["Picture", "RadarTrackView", "time_utc"]
+
+TRAIL = 20
+
+
+def time_utc(t: float) -> str:
+    """Unix time (s) -> ``YYYY-MM-DDTHH:MM:SS.mmmZ``."""
+    return datetime.fromtimestamp(t, UTC).strftime("%Y-%m-%dT%H:%M:%S.%f")[:-3] + "Z"
+
+
+def _num(x: float, digits: int) -> float | None:
+    return round(float(x), digits) if math.isfinite(x) else None
+
+
+@dataclass
+class RadarTrackView:
+    """A radar track of the picture: id, time (Unix s), WGS84 position (deg), speed
+    (m/s), course (rad, true North), position sigma (m), confirmed or not."""
+
+    track_id: int
+    t: float
+    lat: float
+    lon: float
+    speed: float
+    course: float
+    std_m: float
+    confirmed: bool
+
+
+def _feature(fid: str, lat: float, lon: float, props: dict[str, Any]) -> dict[str, Any]:
+    return {
+        "type": "Feature",
+        "id": fid,
+        "geometry": {"type": "Point", "coordinates": [_num(lon, 7), _num(lat, 7)]},
+        "properties": {"id": fid, **props},
+    }
+
+
+class Picture:
+    """Features of the AIS vessels (:class:`~seatrack.live.ais.LiveAis`) and the radar
+    tracks, with short trails; :meth:`refresh` recomputes the features of what changed."""
+
+    def __init__(self) -> None:
+        self.features: dict[str, dict[str, Any]] = {}
+        self.trails: dict[str, deque] = {}
+        self.dirty: set[str] = set()
+        self.removed: set[str] = set()
+
+    def _put(self, fid: str, lat: float, lon: float, props: dict[str, Any]) -> None:
+        trail = self.trails.setdefault(fid, deque(maxlen=TRAIL))
+        pos = [_num(lon, 7), _num(lat, 7)]
+        if not trail or trail[-1] != pos:
+            trail.append(pos)
+        props["trail"] = list(trail)
+        self.features[fid] = _feature(fid, lat, lon, props)
+        self.dirty.add(fid)
+
+    def refresh_ais(self, ais: Any, names: dict[int, str]) -> None:
+        """Features of the vessels changed since the last call (``ais.changed``)."""
+        if not ais.changed:
+            return
+        ids, tr, t = ais.tracks(sorted(ais.changed))
+        ais.changed.clear()
+        for k, m in enumerate(ids):
+            kind = int(tr.outlier_kind[k])
+            props = {
+                "source": "ais",
+                "mmsi": m,
+                "time_utc": time_utc(t[k]),
+                "sog_kn": _num(tr.speed[k] / KNOT_MPS, 2),
+                "cog_deg": _num(bearing_rad_to_deg(tr.course[k]), 1),
+                "status": OUTLIER_KINDS.get(kind, "tracking"),
+                "std_m": _num(tr.std_pos_m[k], 2),
+                "name": names.get(m, ""),
+            }
+            self._put(f"ais:{m}", tr.lat[k], tr.lon[k], props)
+
+    def set_radar(self, tracks: list[RadarTrackView]) -> None:
+        """Replace the radar tracks (after a scan)."""
+        keep = set()
+        for r in tracks:
+            fid = f"radar:{r.track_id}"
+            keep.add(fid)
+            props = {
+                "source": "radar",
+                "mmsi": None,
+                "time_utc": time_utc(r.t),
+                "sog_kn": _num(r.speed / KNOT_MPS, 2),
+                "cog_deg": _num(bearing_rad_to_deg(r.course), 1),
+                "status": "confirmed" if r.confirmed else "tentative",
+                "std_m": _num(r.std_m, 2),
+                "name": "",
+            }
+            self._put(fid, r.lat, r.lon, props)
+        for fid in [f for f in self.features if f.startswith("radar:") and f not in keep]:
+            del self.features[fid]
+            self.trails.pop(fid, None)
+            self.removed.add(fid)
+
+    def collection(self) -> dict[str, Any]:
+        """The whole picture as a GeoJSON FeatureCollection."""
+        return {"type": "FeatureCollection", "features": list(self.features.values())}
+
+    def take_changes(self) -> dict[str, Any] | None:
+        """The features changed and the ids removed since the last call (None if none)."""
+        if not self.dirty and not self.removed:
+            return None
+        msg = {
+            "type": "FeatureCollection",
+            "features": [self.features[f] for f in sorted(self.dirty) if f in self.features],
+            "removed": sorted(self.removed),
+        }
+        self.dirty.clear()
+        self.removed.clear()
+        return msg
+
+    def count(self, source: str) -> int:
+        """Features of ``source``."""
+        return sum(1 for f in self.features if f.startswith(source + ":"))

@@ -1,0 +1,305 @@
+"""The live process: sources -> bounded queue -> NMEA / plots -> trackers -> picture,
+web server, NMEA output and store, in one asyncio loop.
+
+One consumer task takes chunks of lines off the queue (several at a time, so that a
+burst is converted to vessel planes in one vectorised call), runs them through the
+:class:`~seatrack.live.nmea.Assembler`, the duplicate filter and the decoder, and folds
+the position reports into :class:`~seatrack.live.ais.LiveAis`; the counters change
+together with the picture (:mod:`seatrack.live.counters`). Radar chunks go to
+:class:`~seatrack.live.radar.LiveRadar` when a radar is configured. A ticker closes timed
+out scans and fragments, refreshes the picture and feeds the web clients, the NMEA output
+and the store once a second or faster.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import time
+from dataclasses import dataclass
+from dataclasses import field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from seatrack.io.ais.reports import TIME_MAX
+from seatrack.io.ais.reports import TIME_MIN
+from seatrack.live.ais import LiveAis
+from seatrack.live.counters import Counters
+from seatrack.live.nmea import Assembler
+from seatrack.live.nmea import Decoded
+from seatrack.live.nmea import Duplicates
+from seatrack.live.nmea import Message
+from seatrack.live.nmea import decode_message
+from seatrack.live.picture import Picture
+from seatrack.live.sources import Chunk
+from seatrack.live.sources import Source
+from seatrack.live.sources import open_udp
+from seatrack.live.sources import run_source
+
+__all__ = ["LiveOptions", "LiveProcess"]
+
+
+@dataclass
+class LiveOptions:
+    """Options of ``seatrack live`` (see :mod:`seatrack.commands.live`)."""
+
+    ais: list[Source] = field(default_factory=list)
+    plots: list[Source] = field(default_factory=list)
+    radar: Any = None
+    http: tuple[str, int] | None = None
+    nmea_out: tuple[str, int] | None = None
+    store: Path | None = None
+    window_s: float = 10.0
+    queue_size: int = 4096
+    tick_s: float = 0.25
+    commit_s: float = 0.5
+    ais_config: Any = None
+
+
+class LiveProcess:
+    """The live process (see the module docstring); :meth:`run` until ``stop`` is set."""
+
+    def __init__(self, opts: LiveOptions) -> None:
+        self.opts = opts
+        self.counters = Counters()
+        self.assembler = Assembler()
+        self.duplicates = Duplicates(opts.window_s)
+        self.ais = LiveAis(opts.ais_config, opts.window_s)
+        self.names: dict[int, str] = {}
+        self.picture = Picture()
+        self.queue: asyncio.Queue[Chunk] = asyncio.Queue(opts.queue_size)
+        self.radar: Any = None
+        if opts.plots:
+            from seatrack.live.radar import LiveRadar
+
+            self.radar = LiveRadar(opts.radar, self.counters)
+        self.listeners: list[Any] = []  # callables fed the picture changes
+        self.viewers: list[Any] = []  # callables: True while someone watches the picture
+        self.store: Any = None
+        self.writer: Any = None
+        self.restored = 0
+        self.restore_s = 0.0
+        self._closing = asyncio.Event()
+        if opts.store is not None:
+            self._open_store(opts.store)
+        self.nmea_out: Any = None
+        if opts.nmea_out is not None and self.radar is not None:
+            from seatrack.live.nmea_out import NmeaOut
+
+            self.nmea_out = NmeaOut(*opts.nmea_out, self.counters)
+            self.radar.on_scan.append(self.nmea_out.scan)
+        self.http_port: int | None = None
+        self._transports: list[Any] = []
+        self.udp_ports: list[int] = []  # bound ports of the UDP sources, in order
+        self._store_task: asyncio.Task | None = None
+        self._tasks: list[asyncio.Task] = []
+
+    def _open_store(self, path: Path) -> None:
+        from seatrack.live.store import Store
+        from seatrack.live.store import StoreWriter
+
+        t0 = time.perf_counter()
+        self.store = Store(path)
+        self.writer = StoreWriter(self.store)
+        self.ais.emitted = []
+        self.restored = self.writer.restore(self.ais, self.radar, self.counters)
+        self.restore_s = time.perf_counter() - t0
+        self.names.update({m: v.name for m, v in self.ais.vessels.items() if v.name})
+        if self.radar is not None:
+            self.radar.on_scan.append(self.writer.radar_scan)
+
+    async def commit(self) -> None:
+        """Write what was gathered since the last commit (in a worker thread)."""
+        for m in self.ais.dirty:
+            self.ais.vessels[m].name = self.names.get(m, "")
+        batch = self.writer.take(self.ais, self.radar, self.counters)
+        await asyncio.to_thread(self.store.commit, batch)
+
+    async def store_loop(self) -> None:
+        """Commit every ``commit_s`` seconds, and once more when the process stops."""
+        while True:
+            with contextlib.suppress(TimeoutError):
+                await asyncio.wait_for(self._closing.wait(), self.opts.commit_s)
+            closing = self._closing.is_set()  # set during the commit: one more
+            await self.commit()
+            if closing:
+                return
+
+    # ---- AIS ------------------------------------------------------------------------------
+    def overflow(self, chunk: Chunk) -> None:
+        """A datagram that found the queue full: its lines are rejected."""
+        if chunk.kind == "ais":
+            self.counters.reject("queue full", len(chunk.lines))
+        else:
+            self.counters.plots_rejected["queue full"] += 1
+
+    def handle(self, chunks: list[Chunk]) -> None:
+        """Process chunks of lines (AIS messages, radar datagrams)."""
+        messages: list[Message] = []
+        for c in chunks:
+            if c.kind == "plots":
+                if self.radar is not None:
+                    for data in c.lines:
+                        self.radar.datagram(data, c.received_s, c.perf_s)
+                continue
+            for line in c.lines:
+                messages.extend(self.assembler.push(line, c.source, c.received_s, c.perf_s))
+        messages.extend(self.assembler.expire(time.time()))
+        if messages:
+            self.handle_messages(messages)
+
+    def handle_messages(self, messages: list[Message]) -> None:
+        """Count, de-duplicate, decode and track complete messages."""
+        cnt = self.counters
+        pos: list[tuple[Decoded, Message]] = []
+        for m in messages:
+            if m.reject:
+                cnt.reject(m.reject)
+                continue
+            if self.duplicates.seen(m.payload_key, m.received_s):
+                cnt.received += 1
+                cnt.duplicate += 1
+                continue
+            d = decode_message(m.sentences)
+            if isinstance(d, str):
+                cnt.reject(d)
+            elif not TIME_MIN <= m.time_s < TIME_MAX:
+                cnt.reject("time out of range")
+            elif d.is_position:
+                pos.append((d, m))
+            else:
+                if d.name and self.names.get(d.mmsi) != d.name:
+                    self.names[d.mmsi] = d.name
+                    if d.mmsi in self.ais.vessels:
+                        self.ais.dirty.add(d.mmsi)
+                        self.ais.changed.add(d.mmsi)
+                cnt.received += 1
+                cnt.decoded += 1
+        if not pos:
+            return
+        col = lambda f: np.array([f(d, m) for d, m in pos])  # noqa: E731
+        used = self.ais.add(
+            col(lambda d, m: d.mmsi).astype(np.int64), col(lambda d, m: m.time_s),
+            col(lambda d, m: d.lat), col(lambda d, m: d.lon), col(lambda d, m: d.sog_kn),
+            col(lambda d, m: d.cog_deg),
+        )  # fmt: skip
+        n_used = int(used.sum())
+        cnt.received += len(pos)
+        cnt.decoded += n_used
+        cnt.positions += n_used
+        cnt.late += len(pos) - n_used
+        now = time.perf_counter()
+        cnt.latency.add([now - m.perf_s for (_, m), u in zip(pos, used, strict=True) if u])
+        if self.writer is not None:
+            self.writer.ais_reports([
+                (d.mmsi, m.time_s, d.lat, d.lon, d.sog_kn, d.cog_deg, m.source, m.received_s)
+                for (d, m), u in zip(pos, used, strict=True) if u
+            ])  # fmt: skip
+
+    async def consume(self) -> None:
+        """The consumer task: chunks off the queue, in bursts."""
+        while True:
+            chunks = [await self.queue.get()]
+            while len(chunks) < 64:
+                try:
+                    chunks.append(self.queue.get_nowait())
+                except asyncio.QueueEmpty:
+                    break
+            self.handle(chunks)
+            for _ in chunks:
+                self.queue.task_done()
+
+    async def tick(self) -> None:
+        """Close timed-out scans (once the queue is read) and fragments; refresh the
+        picture while someone watches it (the trackers are always current: the GeoJSON
+        view is computed for the viewers)."""
+        while True:
+            await asyncio.sleep(self.opts.tick_s)
+            expired = self.assembler.expire(time.time())
+            if expired:
+                self.handle_messages(expired)
+            if self.radar is not None and self.queue.empty():  # caught up: nothing to read
+                self.radar.timeout(time.time())
+            if any(wants() for wants in self.viewers):
+                self.refresh()
+
+    def refresh(self) -> None:
+        """Update the picture from the trackers and hand the changes to the listeners."""
+        self.picture.refresh_ais(self.ais, self.names)
+        if self.radar is not None and self.radar.changed:
+            self.picture.set_radar(self.radar.current)
+            self.radar.changed = False
+        changes = self.picture.take_changes()
+        if changes is not None:
+            for fn in self.listeners:
+                fn("picture", changes)
+
+    def health(self) -> dict[str, Any]:
+        """``/api/health``: counters, vessels and radar tracks."""
+        h = self.counters.health()
+        h["vessels"] = sum(1 for v in self.ais.vessels.values() if v.estimate is not None)
+        h["radar_tracks"] = 0 if self.radar is None else self.radar.n_tracks
+        h["pending_fragments"] = self.assembler.pending
+        h["queue"] = self.queue.qsize()
+        if self.store is not None:
+            h["store"] = {"path": str(self.store.path), "commits": self.store.commits,
+                          "committed_rows": self.store.committed_rows}  # fmt: skip
+        return h
+
+    # ---- running --------------------------------------------------------------------------
+    async def start(self) -> list[asyncio.Task]:
+        """Bind the sources and start the tasks; returns the tasks of the FILE sources."""
+        cnt = self.counters
+
+        def reconnected() -> None:
+            cnt.reconnects += 1
+
+        self._tasks.append(asyncio.create_task(self.consume()))
+        self._tasks.append(asyncio.create_task(self.tick()))
+        if self.store is not None:
+            self._store_task = asyncio.create_task(self.store_loop())
+        files = []
+        for kind, sources in (("ais", self.opts.ais), ("plots", self.opts.plots)):
+            for src in sources:
+                if src.kind == "udp":
+                    tr = await open_udp(src, self.queue, self.overflow, kind)
+                    self._transports.append(tr)
+                    self.udp_ports.append(tr.get_extra_info("sockname")[1])
+                else:
+                    task = asyncio.create_task(
+                        run_source(src, self.queue, self.overflow, reconnected, kind)
+                    )
+                    self._tasks.append(task)
+                    if src.kind == "file":
+                        files.append(task)
+        return files
+
+    async def drain(self) -> None:
+        """Wait until every queued chunk is processed, then refresh."""
+        await self.queue.join()
+        if self.radar is not None:
+            self.radar.flush()
+        self.refresh()
+
+    async def stop(self) -> None:
+        """Close the sources and cancel the tasks."""
+        for tr in self._transports:
+            tr.close()
+        for t in self._tasks:
+            t.cancel()
+        for t in self._tasks:
+            with contextlib.suppress(asyncio.CancelledError, Exception):
+                await t
+        self._tasks.clear()
+        if self.nmea_out is not None:
+            self.nmea_out.close()
+        if self.store is not None:
+            self._closing.set()
+            if self._store_task is not None:
+                await self._store_task  # the last commit
+            else:
+                await self.commit()
+            self.store.close()
+            self.store = None

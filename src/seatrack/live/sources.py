@@ -1,0 +1,189 @@
+"""Stream sources of the live process: ``udp://HOST:PORT`` (datagrams), ``tcp://HOST:PORT``
+(a client that reconnects with backoff) and a FILE (read once).
+
+AIS sources are split into lines; plot sources (``kind="plots"``) are UDP datagrams or a
+FILE, each passed whole (binary CAT048 or CSV text). Each source puts :class:`Chunk` items
+(the source's name, its lines, the receipt time as Unix seconds and as
+``time.perf_counter()``) on a bounded asyncio queue. A TCP or FILE source waits when the
+queue is full (back-pressure); a UDP datagram cannot wait, so one that arrives on a full
+queue is handed to ``on_overflow`` (the process counts its lines as rejected, ``"queue
+full"``). Lines split across TCP reads are joined.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from urllib.parse import urlsplit
+
+from seatrack.io.table import InputError
+
+__all__ = [
+    "Chunk", "Source", "open_udp", "parse_hostport", "parse_source", "run_file", "run_source",
+    "run_tcp",
+]  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Source:
+    """``kind`` = ``udp`` | ``tcp`` | ``file``; ``host``, ``port`` or ``path``."""
+
+    kind: str
+    host: str = ""
+    port: int = 0
+    path: Path | None = None
+
+    @property
+    def name(self) -> str:
+        return str(self.path) if self.kind == "file" else f"{self.kind}://{self.host}:{self.port}"
+
+
+@dataclass
+class Chunk:
+    """Lines from one source with their receipt time (Unix s and perf counter s)."""
+
+    source: str
+    lines: list[bytes]
+    received_s: float
+    perf_s: float
+    kind: str = "ais"
+
+
+def parse_hostport(text: str, option: str) -> tuple[str, int]:
+    """``HOST:PORT`` -> (host, port), checked."""
+    host, sep, port = text.rpartition(":")
+    if not sep or not host or not port.isdigit() or not 0 <= int(port) <= 65535:
+        raise InputError(f"{option}: expected HOST:PORT, got {text!r}")
+    return host.strip("[]"), int(port)
+
+
+def parse_source(text: str, option: str) -> Source:
+    """``udp://HOST:PORT``, ``tcp://HOST:PORT`` or a file path -> :class:`Source`."""
+    if "://" in text:
+        u = urlsplit(text)
+        if u.scheme not in ("udp", "tcp"):
+            raise InputError(f"{option}: expected udp://HOST:PORT, tcp://HOST:PORT or a file, "
+                             f"got {text!r}")  # fmt: skip
+        host, port = parse_hostport(u.netloc, option)
+        return Source(u.scheme, host, port)
+    p = Path(text)
+    if not p.is_file():
+        raise InputError(f"{option}: {text}: no such file")
+    return Source("file", path=p)
+
+
+class _Udp(asyncio.DatagramProtocol):
+    def __init__(self, name: str, kind: str, queue: asyncio.Queue, overflow: Callable) -> None:
+        self.name, self.kind, self.queue, self.overflow = name, kind, queue, overflow
+
+    def datagram_received(self, data: bytes, addr: object) -> None:
+        lines = data.splitlines() if self.kind == "ais" else [data]  # plots: binary, whole
+        chunk = Chunk(self.name, lines, time.time(), time.perf_counter(), self.kind)
+        try:
+            self.queue.put_nowait(chunk)
+        except asyncio.QueueFull:
+            self.overflow(chunk)
+
+
+async def open_udp(
+    src: Source, queue: asyncio.Queue, overflow: Callable[[Chunk], None], kind: str = "ais"
+) -> asyncio.DatagramTransport:
+    """Bind a UDP source (receive buffer enlarged where the system allows)."""
+    import socket
+
+    loop = asyncio.get_running_loop()
+    sock = socket.socket(socket.AF_INET6 if ":" in src.host else socket.AF_INET,
+                         socket.SOCK_DGRAM)  # fmt: skip
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 8 << 20)
+    except OSError:  # pragma: no cover - system limit
+        pass
+    sock.bind((src.host, src.port))
+    transport, _ = await loop.create_datagram_endpoint(
+        lambda: _Udp(src.name, kind, queue, overflow), sock=sock
+    )
+    return transport
+
+
+async def run_tcp(
+    src: Source,
+    queue: asyncio.Queue,
+    on_reconnect: Callable[[], None],
+    kind: str = "ais",
+    backoff_s: tuple[float, float] = (0.2, 10.0),
+) -> None:
+    """Read lines from a TCP server for ever, reconnecting after a failure or the end of
+    the stream with exponential backoff (``backoff_s`` = first and largest wait, s; reset
+    after a connection that delivered data)."""
+    wait = backoff_s[0]
+    while True:
+        try:
+            reader, writer = await asyncio.open_connection(src.host, src.port)
+        except OSError:
+            await asyncio.sleep(wait)
+            wait = min(2 * wait, backoff_s[1])
+            on_reconnect()
+            continue
+        rest = b""
+        try:
+            while True:
+                data = await reader.read(1 << 16)
+                if not data:
+                    break
+                wait = backoff_s[0]
+                *lines, rest = (rest + data).split(b"\n")
+                if len(rest) > 1 << 16:  # no line end in 64 KiB: not NMEA, pass it on
+                    lines.append(rest)
+                    rest = b""
+                if lines:
+                    chunk = Chunk(src.name, lines, time.time(), time.perf_counter(), kind)
+                    await queue.put(chunk)
+        except OSError:
+            pass
+        finally:
+            writer.close()
+        if rest:  # a line cut by the disconnection: counted (rejected) downstream
+            await queue.put(Chunk(src.name, [rest], time.time(), time.perf_counter(), kind))
+        await asyncio.sleep(wait)
+        wait = min(2 * wait, backoff_s[1])
+        on_reconnect()
+
+
+async def run_file(src: Source, queue: asyncio.Queue, kind: str = "ais", block: int = 512) -> None:
+    """Put a file's lines on the queue (blocks of ``block`` lines) and return; a plot
+    file (CSV or CAT048) goes whole, as one datagram."""
+    assert src.path is not None
+    if kind == "plots":
+        data = src.path.read_bytes()
+        await queue.put(Chunk(src.name, [data], time.time(), time.perf_counter(), kind))
+        return
+    with open(src.path, "rb") as f:
+        lines: list[bytes] = []
+        for line in f:
+            lines.append(line)
+            if len(lines) >= block:
+                await queue.put(Chunk(src.name, lines, time.time(), time.perf_counter(), kind))
+                lines = []
+        if lines:
+            await queue.put(Chunk(src.name, lines, time.time(), time.perf_counter(), kind))
+
+
+async def run_source(
+    src: Source,
+    queue: asyncio.Queue,
+    overflow: Callable[[Chunk], None],
+    on_reconnect: Callable[[], None],
+    kind: str = "ais",
+) -> asyncio.DatagramTransport | None:
+    """Start a source: UDP returns its transport (closed by the caller); TCP runs until
+    cancelled; FILE returns once its lines are queued."""
+    if src.kind == "udp":
+        return await open_udp(src, queue, overflow, kind)
+    if src.kind == "tcp":
+        await run_tcp(src, queue, on_reconnect, kind)
+        return None
+    await run_file(src, queue, kind)
+    return None

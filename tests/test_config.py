@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 import pytest
 
+from seatrack.config import Checked
 from seatrack.config import ConfigError
 from seatrack.config import describe
 from seatrack.config import param
@@ -98,3 +99,23 @@ def test_redefault_changes_only_the_default_in_edge_units():
     assert parse_config(Faster, {"speed_knots": 5.0}).speed == pytest.approx(5 * 1852 / 3600)
     meta = {f.name: f.metadata for f in dataclasses.fields(Faster)}
     assert meta["speed"] == {f.name: f.metadata for f in dataclasses.fields(Demo)}["speed"]
+
+
+def test_checked_runs_the_bounds_and_then_the_subclass_check():
+    @dataclasses.dataclass(frozen=True)
+    class Limits(Checked):
+        low: float = param(1.0, key="low_deg", unit="deg", min=0)
+        high: float = param(2.0, key="high_deg", unit="deg", min=0)
+
+        def __post_init__(self) -> None:
+            super().__post_init__()
+            if self.low > self.high:
+                raise ValueError("low_deg must not exceed high_deg")
+
+    assert Limits().low == pytest.approx(math.radians(1.0))
+    with pytest.raises(ConfigError, match=r"Limits\.low \(low_deg\): must be >= 0 deg"):
+        Limits(low=-0.1)
+    with pytest.raises(ConfigError, match="must be finite"):
+        Limits(high=math.nan)
+    with pytest.raises(ValueError, match="must not exceed"):
+        Limits(low=0.5, high=0.1)

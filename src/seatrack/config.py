@@ -19,6 +19,10 @@ from the field name and carry a unit suffix; :func:`param` declares it::
   ``source: key: expected ...``; numbers must be finite and within ``min``/``max``;
 * the dataclass's own ``__post_init__`` checks cross-field constraints.
 
+A config dataclass derives from :class:`Checked`, so that an instance built directly
+(``EKFConfig(q=-1.0)``) is checked against the same bounds as a parsed one; a subclass
+with cross-field constraints calls ``super().__post_init__()`` first.
+
 Errors are :class:`ConfigError` (a ``ValueError``), whose message starts with the source
 (file name) so that the command line prints ``error: FILE: key: problem``.
 """
@@ -51,6 +55,7 @@ __all__ = [
     "load_toml",
     "to_edge",
     "check_fields",
+    "Checked",
 ]
 
 T = TypeVar("T")
@@ -249,6 +254,23 @@ def check_fields(config: Any) -> None:
             raise ConfigError(f"{where}: must be {op} {lo:g} {unit}".rstrip() + f", got {shown}")
         if hi is not None and v > hi * factor:
             raise ConfigError(f"{where}: must be <= {hi:g} {unit}".rstrip() + f", got {shown}")
+
+
+class Checked:
+    """Base of the config dataclasses: ``__post_init__`` runs :func:`check_fields`.
+
+    A subclass that defines its own ``__post_init__`` (cross-field constraints) calls
+    ``super().__post_init__()`` first.
+
+    Raises
+    ------
+    ConfigError
+        From :func:`check_fields`: a number that is not finite or lies outside the bounds of
+        its :func:`param`, the message naming the field and its key.
+    """
+
+    def __post_init__(self) -> None:
+        check_fields(self)
 
 
 def field_types(cls: type) -> dict[str, Any]:

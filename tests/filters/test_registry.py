@@ -238,3 +238,31 @@ def test_a_record_checks_its_group_and_noise_rule():
         registry.record("nope")
     groups = [registry.names(g) for g in registry.GROUPS]
     assert sorted(sum(groups, [])) == sorted(registry.METHODS) and all(groups)
+
+
+def _noise_fields(name: str) -> list[tuple[str, str, str]]:
+    """``(method, field, key)`` of every bounded sigma / q field of a method's Config."""
+    config = registry.method_class(name).Config
+    return [
+        (name, f.name, str(f.metadata.get("key") or f.name))
+        for f in dataclasses.fields(config)
+        if f.init
+        and f.metadata.get("min") is not None
+        and isinstance(f.default, float)
+        and ("sigma" in f.name or f.name == "q" or f.name.startswith("q_"))
+    ]
+
+
+NOISE_FIELDS = [row for name in registry.names() for row in _noise_fields(name)]
+
+
+def test_every_method_has_a_checked_noise_field():
+    assert {row[0] for row in NOISE_FIELDS} == set(registry.names())
+
+
+@pytest.mark.parametrize("bad", [-1.0, math.nan, math.inf])
+@pytest.mark.parametrize(("name", "field", "key"), NOISE_FIELDS)
+def test_config_built_directly_rejects_bad_noise(name, field, key, bad):
+    config = registry.method_class(name).Config
+    with pytest.raises(ValueError, match=rf"\b{key}\b"):
+        config(**{field: bad})

@@ -4,16 +4,19 @@ managers' rules on hand-made track tables."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
 
 from seatrack.config import ConfigError
+from seatrack.tracking.components import JPDA
 from seatrack.tracking.components import ExistenceManager
 from seatrack.tracking.components import MofNManager
 from seatrack.tracking.components import TrackerConfig
 from seatrack.tracking.components import TrackStatus
 from seatrack.tracking.existence import logit
+from seatrack.tracking.initiators import TwoPointInitiator
 from seatrack.tracking.tracks import TrackTable
 
 KN = 1852.0 / 3600.0
@@ -72,3 +75,31 @@ def test_m_of_n_manager_confirms_and_deletes_by_counts():
     assert auto.max_misses(0.5) == math.ceil(math.log(0.001) / math.log(0.5) - 1e-9)
     with pytest.raises(ValueError, match="2 <= m <= n"):
         MofNManager(5, 3)
+
+
+@pytest.mark.parametrize(
+    ("build", "argument"),
+    [
+        (lambda: JPDA(prune=-0.1), "prune"),
+        (lambda: JPDA(prune=math.nan), "prune"),
+        (lambda: ExistenceManager(max_position_std_m=-1.0), "max_position_std_m"),
+        (lambda: ExistenceManager(max_position_std_m=math.inf), "max_position_std_m"),
+        (lambda: ExistenceManager(confirm=math.nan), "confirm"),
+        (lambda: MofNManager(max_position_std_m=0.0), "max_position_std_m"),
+        (lambda: MofNManager(max_position_std_m=math.nan), "max_position_std_m"),
+        (lambda: MofNManager(m=math.nan), "m <= n"),
+        (lambda: MofNManager(m=2.5, n=4), "m <= n"),
+        (lambda: MofNManager(max_misses=0), "max_misses"),
+        (lambda: MofNManager(max_misses=1.5), "max_misses"),
+        (lambda: TwoPointInitiator(max_speed_kn=-1.0), "max_speed_kn"),
+        (lambda: TwoPointInitiator(initial_speed_sigma_kn=math.nan), "initial_speed_sigma_kn"),
+        (lambda: TwoPointInitiator(births_per_scan=-0.5), "births_per_scan"),
+    ],
+)
+def test_role_constructors_reject_bad_numbers_naming_the_argument(build, argument):
+    with pytest.raises(ValueError, match=re.escape(argument)):
+        build()
+
+
+def test_role_constructors_accept_whole_floats():
+    assert (MofNManager(m=2.0, n=3.0, max_misses=4.0).max_misses(0.9)) == 4

@@ -7,6 +7,7 @@ from __future__ import annotations
 import contextlib
 import math
 import tempfile
+from collections.abc import Mapping
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -24,6 +25,8 @@ __all__ = [
     "navigator_config",
     "start_state",
     "run_navigation",
+    "check_origin",
+    "OPTION_NAMES",
     "MAX_START_SPEED_MPS",
     "MAX_ANTENNA_OFFSET_M",
 ]
@@ -34,42 +37,88 @@ MAX_START_SPEED_MPS = 100.0
 MAX_ANTENNA_OFFSET_M = 1000.0
 
 
-def start_state(x_m: float, y_m: float, heading_deg: float, speed_mps: float) -> list[float]:
+#: the ``seatrack navigate`` option of each argument of :func:`navigate`: the ``names``
+#: the command gives :func:`start_state`, :func:`navigator_config` and :func:`check_origin`
+OPTION_NAMES: dict[str, str] = {
+    "start": "--start",
+    "antenna_period_s": "--antenna-period",
+    "range_limit_m": "--range-limit",
+    "antenna_offset_m": "--antenna-offset",
+    "method": "--method",
+    "clutter_density": "--clutter-density",
+    "origin": "--origin",
+}
+
+
+def _names(names: Mapping[str, str] | None) -> dict[str, str]:
+    """Argument -> the name messages give it: ``names``, else the argument itself."""
+    return {k: k for k in OPTION_NAMES} | dict(names or {})
+
+
+def start_state(
+    x_m: float,
+    y_m: float,
+    heading_deg: float,
+    speed_mps: float,
+    *,
+    names: Mapping[str, str] | None = None,
+) -> list[float]:
     """The initial state ``[X, Y, alpha, Xdot, Ydot, 0]`` (velocity along the heading).
 
     Raises
     ------
     InputError
         A value out of range (``|x|, |y| <= 1e8`` m, heading in [-360, 720] deg,
-        ``|speed| <=`` :data:`MAX_START_SPEED_MPS`), named as ``--start x_m`` etc.
+        ``|speed| <=`` :data:`MAX_START_SPEED_MPS`), named as ``start x_m`` etc. (``start``
+        replaced by ``names["start"]``: ``--start x_m`` on the command line).
     """
-    option_in("--start x_m", x_m, -MAX_DISTANCE_M, MAX_DISTANCE_M)
-    option_in("--start y_m", y_m, -MAX_DISTANCE_M, MAX_DISTANCE_M)
-    option_in("--start heading_deg", heading_deg, -360.0, 720.0)
-    option_in("--start speed_mps", speed_mps, -MAX_START_SPEED_MPS, MAX_START_SPEED_MPS)
+    start = _names(names)["start"]
+    option_in(f"{start} x_m", x_m, -MAX_DISTANCE_M, MAX_DISTANCE_M)
+    option_in(f"{start} y_m", y_m, -MAX_DISTANCE_M, MAX_DISTANCE_M)
+    option_in(f"{start} heading_deg", heading_deg, -360.0, 720.0)
+    option_in(f"{start} speed_mps", speed_mps, -MAX_START_SPEED_MPS, MAX_START_SPEED_MPS)
     a = math.radians(heading_deg)
     return [x_m, y_m, a, speed_mps * math.sin(a), speed_mps * math.cos(a), 0.0]
 
 
 def navigator_config(
-    period: float, range_limit: float, offset: float, method: str, clutter: float
+    period: float,
+    range_limit: float,
+    offset: float,
+    method: str,
+    clutter: float,
+    *,
+    names: Mapping[str, str] | None = None,
 ) -> Any:
-    """The :class:`~seatrack.navigation.navigator.NavigatorConfig` of the options (each
-    checked, by the name of its command-line option)."""
+    """The :class:`~seatrack.navigation.navigator.NavigatorConfig` of the arguments of
+    :func:`navigate` (each checked, named as :func:`navigate` names it, or as ``names``
+    says: :data:`OPTION_NAMES` on the command line)."""
     from dataclasses import replace
 
     from seatrack.navigation.navigator import NavigatorConfig
 
-    option_positive("--antenna-period", period, 3600.0)
-    option_positive("--range-limit", range_limit, MAX_DISTANCE_M)
-    option_in("--antenna-offset", offset, -MAX_ANTENNA_OFFSET_M, MAX_ANTENNA_OFFSET_M)
-    option_positive("--clutter-density", clutter, 1.0)
+    name = _names(names)
+    option_positive(name["antenna_period_s"], period, 3600.0)
+    option_positive(name["range_limit_m"], range_limit, MAX_DISTANCE_M)
+    option_in(name["antenna_offset_m"], offset, -MAX_ANTENNA_OFFSET_M, MAX_ANTENNA_OFFSET_M)
+    option_positive(name["clutter_density"], clutter, 1.0)
     if method not in ("ekf", "srif"):
-        raise InputError(f"--method must be 'ekf' or 'srif', got {method!r}")
+        raise InputError(f"{name['method']} must be 'ekf' or 'srif', got {method!r}")
     cfg = NavigatorConfig(
         antenna_period=period, range_limit=range_limit, antenna_offset=offset, method=method
     )
     return replace(cfg, gate=replace(cfg.gate, clutter_density=clutter))
+
+
+def check_origin(
+    lat_deg: float, lon_deg: float, *, names: Mapping[str, str] | None = None
+) -> tuple[float, float]:
+    """``(lat_deg, lon_deg)`` of a local frame's origin, checked (named ``origin lat_deg``
+    etc., ``origin`` replaced by ``names["origin"]``)."""
+    origin = _names(names)["origin"]
+    option_in(f"{origin} lat_deg", lat_deg, -90.0, 90.0)
+    option_in(f"{origin} lon_deg", lon_deg, -180.0, 180.0)
+    return lat_deg, lon_deg
 
 
 def run_navigation(
@@ -179,8 +228,7 @@ def navigate(
         antenna_period_s, range_limit_m, antenna_offset_m, method, clutter_density
     )
     if origin is not None:
-        option_in("--origin lat_deg", origin[0], -90.0, 90.0)
-        option_in("--origin lon_deg", origin[1], -180.0, 180.0)
+        origin = check_origin(*origin)
     res = run_navigation(landmarks, echoes, x0, cfg, gyro, origin)
     from seatrack.io.navigation import write_nav
 

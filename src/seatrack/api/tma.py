@@ -257,15 +257,18 @@ def solve(
     range_sigma_m: float = 100.0,
 ) -> TMAResult:
     """:func:`tma` with the arguments named in messages as ``names`` says (the command
-    line's options: ``{"sigma_deg": "--sigma-deg", "manoeuvres": "--manoeuvres"}``)."""
-    name = {"sigma_deg": "sigma_deg", "manoeuvres": "manoeuvres", **(names or {})}
+    line's options: ``{"sigma_deg": "--sigma-deg", "manoeuvres": "--manoeuvres"}``, and
+    :data:`seatrack.io.tma.OPTION_NAMES`); an argument not in ``names`` is named as
+    itself."""
     from seatrack.io.rep import read_tma_files
+    from seatrack.io.tma import OPTION_NAMES
     from seatrack.io.tma import apply_base_frequencies
     from seatrack.io.tma import measurement_defaults
     from seatrack.io.tma import read_support
     from seatrack.tma import TMAConfig
     from seatrack.tma import solve_many
 
+    name = {k: k for k in (*OPTION_NAMES, "manoeuvres")} | dict(names or {})
     cfg = config if config is not None else TMAConfig()
     if sigma_deg is None:
         sigma_deg = math.degrees(cfg.sigma)
@@ -276,7 +279,7 @@ def solve(
         )
     speed = cfg.sound_speed if sound_speed_mps is None else float(sound_speed_mps)
     defaults = measurement_defaults(
-        sigma_deg, _tonal_items(frequency_sigma_hz), atb_sigma_deg, range_sigma_m, speed
+        sigma_deg, _tonal_items(frequency_sigma_hz), atb_sigma_deg, range_sigma_m, speed, name
     )
     sigma = defaults.bearing
     cfg = dataclasses.replace(cfg, sigma=sigma, sound_speed=speed)

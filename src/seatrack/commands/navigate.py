@@ -38,6 +38,7 @@ def parse_start(text: str) -> list[float]:
         Not four numbers, or a value out of range (``|x|, |y| <= 1e8`` m, heading in
         [-360, 720] deg, ``|speed| <=`` :data:`seatrack.api.navigate.MAX_START_SPEED_MPS`).
     """
+    from seatrack.api.navigate import OPTION_NAMES
     from seatrack.api.navigate import start_state
 
     parts = [p.strip() for p in text.split(",")]
@@ -49,11 +50,12 @@ def parse_start(text: str) -> list[float]:
         raise InputError(
             f"--start must be 'x_m,y_m,heading_deg,speed_mps' (4 numbers), got {text!r}"
         )
-    return start_state(*vals)
+    return start_state(*vals, names=OPTION_NAMES)
 
 
 def _origin(text: str | None) -> tuple[float, float] | None:
-    from seatrack.api.options import option_in
+    from seatrack.api.navigate import OPTION_NAMES
+    from seatrack.api.navigate import check_origin
 
     if text is None:
         return None
@@ -61,9 +63,7 @@ def _origin(text: str | None) -> tuple[float, float] | None:
         lat, lon = (float(v) for v in text.split(","))
     except ValueError:
         raise InputError(f"--origin must be 'lat_deg,lon_deg', got {text!r}") from None
-    option_in("--origin lat_deg", lat, -90.0, 90.0)
-    option_in("--origin lon_deg", lon, -180.0, 180.0)
-    return lat, lon
+    return check_origin(lat, lon, names=OPTION_NAMES)
 
 
 #: the navigator options of ``navigate`` and ``survey``: (parameter, type, option); the
@@ -98,9 +98,11 @@ def _with_navigator(command: Callable[..., None]) -> Callable[..., None]:
 
     @functools.wraps(command)
     def run(**kwargs: Any) -> None:
+        from seatrack.api.navigate import OPTION_NAMES
         from seatrack.api.navigate import navigator_config
 
-        cfg = navigator_config(*(kwargs.pop(name) for name, _, _ in _NAVIGATOR_OPTIONS[:5]))
+        values = (kwargs.pop(name) for name, _, _ in _NAVIGATOR_OPTIONS[:5])
+        cfg = navigator_config(*values, names=OPTION_NAMES)
         command(cfg=cfg, **kwargs)
 
     run.__signature__ = sig.replace(parameters=own + extra)  # type: ignore[attr-defined]

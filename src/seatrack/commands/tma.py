@@ -104,6 +104,7 @@ def register(app: typer.Typer) -> None:
         from seatrack.io.atomic import atomic_write
         from seatrack.io.atomic import check_output_path
         from seatrack.io.rep import is_rep
+        from seatrack.io.tma import OPTION_NAMES
         from seatrack.io.tma import parse_tonal_values
         from seatrack.io.tma import solution_summary
 
@@ -123,7 +124,7 @@ def register(app: typer.Typer) -> None:
             raise InputError("--rep-out needs REP input (the solution needs a geographic frame)")
         times = _parse_times(manoeuvres)
         _, base = parse_tonal_values(base_frequency, "--base-frequency", "Hz")
-        names = {"sigma_deg": "--sigma-deg", "manoeuvres": "--manoeuvres"}
+        names = {**OPTION_NAMES, "manoeuvres": "--manoeuvres"}
         res = solve(
             list(bearings), sigma_deg, None, support, times, not no_detect, names,
             sound_speed_mps=sound_speed, base_frequency_hz=base,

@@ -48,7 +48,7 @@ from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
 from seatrack import kalman
-from seatrack.config import check_fields
+from seatrack.config import Checked
 from seatrack.config import param
 from seatrack.filters.converted import convert_plots
 from seatrack.filters.converted import polar_jacobian
@@ -358,7 +358,7 @@ def _zip_many(
 # The sensor section shared by every method
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
-class SensorNoise:
+class SensorNoise(Checked):
     """Measurement noise of the plots: the ``[sensor]`` section every method shares.
 
     One documented default for every method (a typical coastal / naval surveillance radar);
@@ -385,7 +385,7 @@ class SensorNoise:
     )  # fmt: skip
 
     def __post_init__(self) -> None:
-        check_fields(self)  # bounds of the keys also when built directly
+        super().__post_init__()
 
 
 def speed_sigma_param(default: float, aliases: Sequence[str] = ()) -> Any:

@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
 from seatrack import kalman
+from seatrack.config import Checked
 from seatrack.config import param
 from seatrack.filters.base import Plots
 from seatrack.filters.base import SensorNoise
@@ -57,7 +58,7 @@ def _common_dt(dt: FloatArray) -> Any:
 
 
 @dataclass(frozen=True)
-class CVCTIMMConfig:
+class CVCTIMMConfig(Checked):
     """Parameters of ``--method imm``: CV + coordinated turn on converted plots (the noise
     defaults were chosen on the tuning seeds of ``benchmarks/multimodel.py``, 2 s scans)."""
 

@@ -17,6 +17,7 @@ from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
 from seatrack import kalman
+from seatrack.config import Checked
 from seatrack.config import param
 from seatrack.filters.base import CartesianState
 from seatrack.filters.base import ConfiguredFilter
@@ -50,7 +51,7 @@ def sensor_state(plots: Plots, d: int) -> FloatArray:
 
 
 @dataclass(frozen=True)
-class EKFConfig:
+class EKFConfig(Checked):
     """Parameters of the constant-velocity EKF (``seatrack track --method ekf``)."""
 
     q: float = param(1.0, unit="m^2/s^3", doc="white-noise acceleration PSD", min=0)

@@ -71,6 +71,7 @@ from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
 from seatrack import kalman
+from seatrack.config import Checked
 from seatrack.config import param
 from seatrack.config import redefault
 from seatrack.filters.base import CartesianState
@@ -140,7 +141,7 @@ LADDER = (1e-4, 1e-2, 1.0, 1e2, 5e3)
 # Configuration
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
-class LevelConfig:
+class LevelConfig(Checked):
     """The process-noise levels of the IMM and the start of a track.
 
     ``accel_levels`` (set by a ``target`` class) take precedence over ``q_levels``; the
@@ -193,6 +194,7 @@ class LevelConfig:
     initial_speed_sigma: float = speed_sigma_param(300.0)
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         levels = self.accel_levels or self.q_levels
         if not levels:
             raise ValueError("q_levels: at least one process-noise level is needed")
@@ -227,7 +229,7 @@ class LevelConfig:
 
 
 @dataclass(frozen=True)
-class OutlierConfig:
+class OutlierConfig(Checked):
     """The contaminated-Gaussian plot noise (spec ``robust.md``): each channel is an outlier
     with prior ``epsilon``, variance ``k r``.
 
@@ -291,7 +293,7 @@ class ContaminatedConfig(OutlierConfig, LevelConfig):
 
 
 @dataclass(frozen=True)
-class RangeRateWithoutClass:
+class RangeRateWithoutClass(Checked):
     """Mixin of the configurations that use the plots' range rate on the self-tuning ladder
     but not with a target class (``robust``, ``huber``, ``student-t``).
 
@@ -737,13 +739,13 @@ class HuberLevels(LevelIMM):
     contamination (:func:`huber_minimax_threshold`: 2.63 for a clean channel at the
     learnt floor 1e-3, 0.86 at 20 %); the plots' range rate on the ladder.
 
-    Before, the threshold was 1.345 and the level likelihood the Student-t density (3
-    degrees of freedom) of the whitened innovation: its heavy tails treated the first
-    large innovations of a manoeuvre as outliers (the levels ``q >= 1e2`` had probability
-    0.32 over the first three scans of a fighter's turn, 0.84 now); with range rate that
-    version had 14.64 m on the tuning runs of ``ais-doppler`` (13.05 m without), and with
-    the learnt contaminated likelihood but the fixed threshold 13.29 m (12.71 m now;
-    docs/defaults.md)."""
+    Why these choices: a Student-t level likelihood (3 degrees of freedom) of the whitened
+    innovation, with its heavy tails, treats the first large innovations of a manoeuvre as
+    outliers (the levels ``q >= 1e2`` get probability 0.32 over the first three scans of a
+    fighter's turn, against 0.84 with the contaminated likelihood); on the tuning runs of
+    ``ais-doppler`` with range rate, threshold 1.345 with that likelihood gives 14.64 m
+    (13.05 m without range rate), 1.345 with the learnt contaminated likelihood 13.29 m,
+    the minimax thresholds 12.71 m (docs/defaults.md)."""
 
     Config: ClassVar[type] = HuberLevelsConfig
     dims: ClassVar[tuple[int, ...]] = (2,)
@@ -768,13 +770,13 @@ class StudentTLevels(LevelIMM):
     scans and set each channel's degrees of freedom (:func:`student_t_dof`); the plots'
     range rate on the ladder.
 
-    Before, every channel had 3 degrees of freedom and the level likelihood was the
-    Student-t density of the whitened innovation: its heavy tails treated the first large
-    innovations of a manoeuvre as outliers (the levels ``q >= 1e2`` had probability 0.33
-    over the first three scans of a fighter's turn, 0.84 now); with range rate that
-    version had 16.63 m on the tuning runs of ``ais-doppler`` (13.17 m without), and with
-    the learnt contaminated likelihood but 3 degrees of freedom 14.04 m (12.85 m now;
-    docs/defaults.md)."""
+    Why these choices: a Student-t level likelihood of the whitened innovation, with its
+    heavy tails, treats the first large innovations of a manoeuvre as outliers (the levels
+    ``q >= 1e2`` get probability 0.33 over the first three scans of a fighter's turn,
+    against 0.84 with the contaminated likelihood); on the tuning runs of ``ais-doppler``
+    with range rate, 3 degrees of freedom on every channel with that likelihood give
+    16.63 m (13.17 m without range rate), 3 degrees of freedom with the learnt contaminated
+    likelihood 14.04 m, the learnt degrees of freedom 12.85 m (docs/defaults.md)."""
 
     Config: ClassVar[type] = StudentTLevelsConfig
     dims: ClassVar[tuple[int, ...]] = (2,)

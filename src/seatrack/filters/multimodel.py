@@ -63,6 +63,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
+from seatrack.config import Checked
 from seatrack.config import param
 from seatrack.filters.base import CartesianState
 from seatrack.filters.base import Plots
@@ -489,7 +490,7 @@ class MultiModelFilter:
 # The filter contract: `seatrack track --method mm | mm-rangerate`
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
-class MultiModelTrackConfig:
+class MultiModelTrackConfig(Checked):
     """Parameters of ``--method mm`` (position-only reliabilities, the prior art).
 
     The hypotheses are the embodiment's five: ``accel`` North, East, South, West and zero.

@@ -72,6 +72,7 @@ from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 from scipy.stats import chi2
 
+from seatrack.config import Checked
 from seatrack.geometry import angle_diff
 from seatrack.geometry import bearing
 from seatrack.geometry import polar_to_cart
@@ -179,7 +180,7 @@ def _frozen(values: list[float]) -> FloatArray:
 
 
 @dataclass(frozen=True)
-class RobustConfig:
+class RobustConfig(Checked):
     """Thresholds and switches of algorithms R and A (spec "Algorithm R", "Algorithm A").
 
     Parameters
@@ -221,6 +222,7 @@ class RobustConfig:
     rotate_covariance: bool = False
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         for name in ("delta_range", "delta_bearing", "l_factor_range", "l_factor_bearing"):
             v = getattr(self, name)
             if not np.isfinite(v) or v <= 0:

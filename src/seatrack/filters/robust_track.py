@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
 from seatrack import kalman
+from seatrack.config import Checked
 from seatrack.config import param
 from seatrack.filters.base import ConfiguredFilter
 from seatrack.filters.base import Plots
@@ -69,7 +70,7 @@ _LOG_2PI = math.log(2.0 * math.pi)
 
 
 @dataclass(frozen=True)
-class SonarMotionConfig:
+class SonarMotionConfig(Checked):
     """Motion model and start of the sonar filters (see :class:`SonarModel`)."""
 
     sigma_a: float = param(0.02, unit="m/s^2", doc="constant disturbance L0 (accel. std)", min=0)

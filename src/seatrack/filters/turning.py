@@ -49,6 +49,7 @@ from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
 from seatrack import kalman
+from seatrack.config import Checked
 from seatrack.config import param
 from seatrack.filters.base import CartesianState
 from seatrack.filters.base import Plots
@@ -122,7 +123,7 @@ def sigma_omega0_param(doc: str) -> Any:
 
 
 @dataclass(frozen=True)
-class TurningConfig:
+class TurningConfig(Checked):
     """Parameters of the turning-target filter (defaults from ``docs/turning.md``); the
     plot noise is the shared sensor section (:class:`~seatrack.filters.base.SensorNoise`).
 
@@ -204,6 +205,7 @@ class TurningConfig:
         )
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         positive = (
             "q_nominal",
             "sigma_velocity0",

@@ -32,6 +32,7 @@ from dataclasses import field
 from pathlib import Path
 from typing import Any
 
+from seatrack.config import Checked
 from seatrack.config import ConfigError
 from seatrack.config import load_toml
 from seatrack.config import param
@@ -45,7 +46,7 @@ __all__ = ["RadarSite", "RadarSetup", "parse_radar_config", "load_radar_config",
 
 
 @dataclass(frozen=True)
-class RadarSite:
+class RadarSite(Checked):
     """Position, coverage and scan timing of a radar (SI units and radians inside)."""
 
     lat: float = param(
@@ -92,6 +93,7 @@ class RadarSite:
     method: str = param("ekf", doc="per-track filter of the multi-target tracker")
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         if self.min_range >= self.max_range:
             raise ValueError(
                 f"min_range_m ({self.min_range:g}) must be below max_range_m ({self.max_range:g})"

@@ -72,6 +72,7 @@ __all__ = [
     "TMAInput",
     "apply_base_frequencies",
     "measurement_defaults",
+    "OPTION_NAMES",
     "parse_tonal_values",
     "read_bearings",
     "read_tma_input",
@@ -415,30 +416,44 @@ def parse_tonal_values(
     return default, out
 
 
+#: the ``seatrack tma`` option of each value :func:`measurement_defaults` checks
+OPTION_NAMES: dict[str, str] = {
+    "sigma_deg": "--sigma-deg",
+    "sound_speed_mps": "--sound-speed",
+    "atb_sigma_deg": "--atb-sigma-deg",
+    "range_sigma_m": "--range-sigma-m",
+    "frequency_sigma_hz": "--frequency-sigma",
+}
+
+
 def measurement_defaults(
     sigma_deg: float,
     frequency_sigma: Sequence[str],
     atb_sigma_deg: float,
     range_sigma_m: float,
     sound_speed: float = 1500.0,
+    names: Mapping[str, str] | None = None,
 ) -> MeasurementDefaults:
     """The sigmas of ``seatrack tma`` options, validated (degrees, Hz, metres in; SI and
     radians out). ``frequency_sigma`` holds ``HZ`` (every tonal) and ``TONAL=HZ`` items
-    (default 0.1 Hz); ``sound_speed`` (m/s) is only checked.
+    (default 0.1 Hz); ``sound_speed`` (m/s) is only checked. ``names`` maps ``sigma_deg``,
+    ``sound_speed_mps``, ``atb_sigma_deg``, ``range_sigma_m`` and ``frequency_sigma_hz``
+    to the name a message gives the value (default: the command-line options).
 
     Raises
     ------
     InputError
-        A value out of range, naming its option.
+        A value out of range, naming its option (or its name in ``names``).
     """
-    checks = (("--sigma-deg", sigma_deg, "degrees", 0.0, 180.0),
-              ("--sound-speed", sound_speed, "m/s", 100.0, 10_000.0),
-              ("--atb-sigma-deg", atb_sigma_deg, "degrees", 0.0, 180.0),
-              ("--range-sigma-m", range_sigma_m, "metres", 0.0, 1e8))  # fmt: skip
-    for name, v, unit, lo, hi in checks:
+    name = {**OPTION_NAMES, **(names or {})}
+    checks = ((name["sigma_deg"], sigma_deg, "degrees", 0.0, 180.0),
+              (name["sound_speed_mps"], sound_speed, "m/s", 100.0, 10_000.0),
+              (name["atb_sigma_deg"], atb_sigma_deg, "degrees", 0.0, 180.0),
+              (name["range_sigma_m"], range_sigma_m, "metres", 0.0, 1e8))  # fmt: skip
+    for label, v, unit, lo, hi in checks:
         if not (math.isfinite(v) and lo < v < hi):
-            raise InputError(f"{name} must be a number of {unit} in ({lo:g}, {hi:g}), got {v}")
-    fdefault, fsig = parse_tonal_values(frequency_sigma, "--frequency-sigma", "Hz", True)
+            raise InputError(f"{label} must be a number of {unit} in ({lo:g}, {hi:g}), got {v}")
+    fdefault, fsig = parse_tonal_values(frequency_sigma, name["frequency_sigma_hz"], "Hz", True)
     return MeasurementDefaults(
         math.radians(sigma_deg), 0.1 if fdefault is None else fdefault, fsig,
         math.radians(atb_sigma_deg), float(range_sigma_m),

@@ -40,6 +40,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
+from seatrack.config import Checked
 from seatrack.config import ConfigError
 from seatrack.config import param
 from seatrack.config import parse_config
@@ -66,7 +67,7 @@ __all__ = [
 
 
 @dataclass(frozen=True)
-class TargetPopulation:
+class TargetPopulation(Checked):
     """The target population of a multi-target scenario (SI inside; edge units in keys)."""
 
     targets: int = param(10, doc="targets at the start", min=0)
@@ -100,6 +101,7 @@ class TargetPopulation:
     crossings: int = param(2, doc="pairs of targets crossing each other", min=0)
 
     def __post_init__(self) -> None:
+        super().__post_init__()
         edge = to_edge(self)
         for key in ("range_m", "speed_kn", "turn_rate_dps", "turn_angle_deg"):
             lo_hi = edge[key]

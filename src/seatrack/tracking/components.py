@@ -31,7 +31,7 @@ from typing import runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
-from seatrack.config import check_fields
+from seatrack.config import Checked
 from seatrack.config import param
 from seatrack.config import parse_config
 from seatrack.filters.base import Plots
@@ -100,7 +100,7 @@ _TENTATIVE, _CONFIRMED, _COASTING = (
 
 
 @dataclass(frozen=True)
-class TrackerConfig:
+class TrackerConfig(Checked):
     """Parameters of the multi-target tracker (the sensor noise is the filter's).
 
     The fields hold SI values (m/s, s, rad/s); their keys carry the edge unit
@@ -181,7 +181,7 @@ class TrackerConfig:
     )
 
     def __post_init__(self) -> None:
-        check_fields(self)  # bounds of the keys also when built directly
+        super().__post_init__()
         mn = tuple(self.m_of_n)
         if len(mn) != 2 or any(float(v) != int(v) for v in mn):
             raise ValueError(f"m_of_n: expected two integers [M, N], got {list(mn)}")
@@ -370,6 +370,8 @@ class JPDA:
     """
 
     def __init__(self, prune: float = PRUNE) -> None:
+        if not 0.0 <= prune < 1.0:
+            raise ValueError(f"prune: must be in [0, 1), got {prune!r}")
         self.prune = float(prune)
         self.fallbacks = 0
 
@@ -415,6 +417,18 @@ class JPDA:
 # ---------------------------------------------------------------------------
 # Track managers
 # ---------------------------------------------------------------------------
+def _is_count(v: object) -> bool:
+    """``v`` is a whole number (an int, or a float with an integral value)."""
+    return isinstance(v, (int, float, np.integer, np.floating)) and float(v).is_integer()
+
+
+def _position_std_limit(max_position_std_m: float) -> float:
+    """The deletion limit on a track's position std, m: a positive finite number."""
+    if not (math.isfinite(max_position_std_m) and max_position_std_m > 0):
+        raise ValueError(f"max_position_std_m: must be > 0 and finite, got {max_position_std_m!r}")
+    return float(max_position_std_m)
+
+
 def _status(reported: BoolArray, hit: BoolArray) -> NDArray[np.int8]:
     return np.where(reported, np.where(hit, _CONFIRMED, _COASTING), _TENTATIVE).astype(np.int8)
 
@@ -429,11 +443,9 @@ class ExistenceManager:
     ) -> None:
         if not 0.0 <= delete < confirm <= 1.0:
             raise ValueError(f"need 0 <= delete < confirm <= 1, got {delete!r}, {confirm!r}")
-        if not max_position_std_m > 0:
-            raise ValueError(f"max_position_std_m: must be > 0, got {max_position_std_m!r}")
         self.confirm = float(confirm)
         self.delete = float(delete)
-        self.max_position_std = float(max_position_std_m)
+        self.max_position_std = _position_std_limit(max_position_std_m)
 
     @classmethod
     def from_config(cls, config: TrackerConfig) -> ExistenceManager:
@@ -467,15 +479,13 @@ class MofNManager:
         max_misses: int | None = None,
         max_position_std_m: float = 1000.0,
     ) -> None:
-        if not 2 <= int(m) <= int(n) or m != int(m) or n != int(n):
+        if not (_is_count(m) and _is_count(n) and 2 <= m <= n):
             raise ValueError(f"need integers 2 <= m <= n, got m={m!r}, n={n!r}")
-        if max_misses is not None and not max_misses >= 1:
-            raise ValueError(f"max_misses: must be >= 1, got {max_misses!r}")
-        if not max_position_std_m > 0:
-            raise ValueError(f"max_position_std_m: must be > 0, got {max_position_std_m!r}")
+        if max_misses is not None and not (_is_count(max_misses) and max_misses >= 1):
+            raise ValueError(f"max_misses: must be an integer >= 1, got {max_misses!r}")
         self.m, self.n = int(m), int(n)
-        self.max_misses_given = max_misses
-        self.max_position_std = float(max_position_std_m)
+        self.max_misses_given = None if max_misses is None else int(max_misses)
+        self.max_position_std = _position_std_limit(max_position_std_m)
 
     @classmethod
     def from_config(cls, config: TrackerConfig) -> MofNManager:

@@ -1,4 +1,4 @@
-"""The multi-target tracker under its earlier names: :class:`MultiTargetTracker` is the
+"""The multi-target tracker by the name :class:`MultiTargetTracker`: the
 :class:`~seatrack.tracking.roles.Tracker` with the roles of its configuration, built with
 the sensor noise as the second positional argument. Everything else is
 :mod:`seatrack.tracking.roles`.

@@ -76,3 +76,9 @@ def test_the_documented_method_isolates_a_bad_plot(alpha_beta):
         cols = registry.run("alpha-beta", bad, {})
     assert cols["status"][30] == "rejected"
     assert np.isfinite(cols["x_m"]).all()
+
+
+def test_the_documented_config_checks_its_bounds_when_built_directly(alpha_beta):
+    assert alpha_beta.AlphaBetaConfig(alpha=0.3).alpha == 0.3
+    with pytest.raises(ValueError, match=r"AlphaBetaConfig\.alpha: must be <= 1"):
+        alpha_beta.AlphaBetaConfig(alpha=1.5)

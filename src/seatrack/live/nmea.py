@@ -27,6 +27,7 @@ from typing import Any
 from seatrack.io.ais.nmea import POSITION_TYPES
 from seatrack.io.ais.nmea import checksum_ok
 from seatrack.io.ais.nmea import nmea_checksum
+from seatrack.io.ais.nmea import parse_tag_time
 from seatrack.io.ais.reports import COG_NOT_AVAILABLE_DEG
 from seatrack.io.ais.reports import MMSI_MAX
 from seatrack.io.ais.reports import SOG_NOT_AVAILABLE_KN
@@ -37,19 +38,6 @@ __all__ = [
 ]  # fmt: skip
 
 _TAG = re.compile(rb"^\\([^\\]*)\\")
-
-
-def parse_tag_time(tag: bytes) -> float | None:
-    """Unix time (s) of a tag block's ``c:`` field (ms above 1e11), None if absent or bad."""
-    body = tag.split(b"*", 1)[0]
-    for item in body.split(b","):
-        if item.startswith(b"c:"):
-            try:
-                c = float(item[2:])
-            except ValueError:
-                return None
-            return c / 1000.0 if c > 1e11 else c
-    return None
 
 
 @dataclass

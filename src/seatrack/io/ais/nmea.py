@@ -39,6 +39,7 @@ __all__ = [
     "is_nmea_line",
     "nmea_checksum",
     "nmea_rows",
+    "parse_tag_time",
 ]
 
 #: AIS message types that carry a position report
@@ -81,20 +82,28 @@ class _Pending:
     lines: list[int] = field(default_factory=list)
 
 
+def parse_tag_time(tag: bytes) -> float | None:
+    """Unix time (s) of a tag block's ``c:`` field (ms above 1e11), None if absent or bad."""
+    body = tag.split(b"*", 1)[0]
+    for item in body.split(b","):
+        if item.startswith(b"c:"):
+            try:
+                c = float(item[2:])
+            except ValueError:
+                return None
+            return c / 1000.0 if c > 1e11 else c
+    return None
+
+
 def _time_of(prefix: bytes, tag: bytes | None) -> tuple[float, bool]:
     """(epoch seconds or NaN, tag-block checksum ok)."""
     t = float("nan")
     ok = True
     if tag is not None:
         ok = checksum_ok(tag)
-        body = tag.split(b"*", 1)[0]
-        for item in body.split(b","):
-            if item.startswith(b"c:"):
-                try:
-                    c = float(item[2:])
-                except ValueError:
-                    continue
-                t = c / 1000.0 if c > 1e11 else c
+        c = parse_tag_time(tag)
+        if c is not None:
+            t = c
     if np.isnan(t) and prefix:
         txt = prefix.decode("ascii", "replace").strip().rstrip(",;").strip()
         if txt:

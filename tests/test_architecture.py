@@ -7,8 +7,9 @@ Layers point one way (a module imports only from its own layer or lower ones)::
     2  tracking                                    (multi-target tracking)
     3  io                                          (file formats: readers and writers)
     4  simulate, evaluate                          (scenarios, statistics; they use io)
-    5  report
-    6  commands, cli
+    5  report, fusion
+    6  api
+    7  commands, cli
 
 ``io`` sits below ``simulate`` and ``evaluate``: a file format depends on the estimators'
 types only, while a simulator reads scenario files and real data (the AIS replay) and the
@@ -52,8 +53,10 @@ LAYERS: dict[str, int] = {
     "simulate": 4,
     "evaluate": 4,
     "report": 5,
-    "commands": 6,
-    "cli": 6,
+    "fusion": 5,
+    "api": 6,
+    "commands": 7,
+    "cli": 7,
 }
 MAX_LINES = 800
 LONG_FUNCTION = 120

@@ -24,12 +24,12 @@ def _run(*args: str) -> tuple[int, str, str]:
     return int(exc.value.code or 0), out.getvalue(), err.getvalue()
 
 
-COMMANDS = ["demo", "simulate", "evaluate", "tma", "track", "navigate", "survey", "ais"]
+COMMANDS = ["demo", "simulate", "evaluate", "tma", "track", "navigate", "survey", "ais", "fuse"]
 
 
 def test_every_command_module_is_registered():
     names = {c.name for c in typer.main.get_command(app).commands.values()}  # type: ignore[attr-defined]
-    assert set(COMMANDS) <= names and len(COMMAND_MODULES) == 7
+    assert set(COMMANDS) <= names and len(COMMAND_MODULES) == 8
 
 
 @pytest.mark.parametrize("args", [["-h"], ["--help"], *([c, "-h"] for c in COMMANDS)])

@@ -41,6 +41,7 @@ COMMAND_MODULES = [
     "seatrack.commands.track",
     "seatrack.commands.navigate",
     "seatrack.commands.ais",
+    "seatrack.commands.fuse",
 ]
 
 app = typer.Typer(

@@ -18,15 +18,21 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from dataclasses import fields
+from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.config import ConfigError
+from seatrack.config import load_toml
+from seatrack.config import parse_config
 from seatrack.filters.ais import track_reports
-from seatrack.filters.ais.tracks import AisTracks
 from seatrack.filters.ais.kernel import OutlierKind
+from seatrack.filters.ais.tracks import AisTracks
 from seatrack.filters.base import Plots
 from seatrack.fusion.anomalies import gap_limits
 from seatrack.fusion.anomalies import reporting_gaps
@@ -42,6 +48,7 @@ from seatrack.geometry import velocity_from_course
 from seatrack.io.ais.reports import AisReports
 from seatrack.io.multitarget import make_filter
 from seatrack.io.radar import RadarSetup
+from seatrack.io.radar import parse_radar_config
 from seatrack.tracking import MultiTargetTracker
 from seatrack.tracking import TrackStatus
 
@@ -58,6 +65,8 @@ __all__ = [
     "radar_tracks",
     "fuse_picture",
     "CLASSES",
+    "parse_fusion_config",
+    "load_fusion_config",
 ]
 
 #: radar track classes (the ``class`` column)
@@ -119,7 +128,9 @@ def prepare_ais(reports: AisReports, coverage: Coverage, cfg: FusionConfig) -> A
     sub = r.take(kept)
     sub.mmsi = split.vessel[kept]  # each trajectory its own vessel
     tr = _scatter(track_reports(sub), kept, r.t.size)
-    bad = np.isin(tr.outlier_kind, [OutlierKind.IMPLAUSIBLE_JUMP, OutlierKind.IMPLAUSIBLE_AFTER_GAP])
+    bad = np.isin(
+        tr.outlier_kind, [OutlierKind.IMPLAUSIBLE_JUMP, OutlierKind.IMPLAUSIBLE_AFTER_GAP]
+    )
     jump = split.jump | (use & bad)
     n_v = split.vessel_mmsi.size
     limit = gap_limits(split.vessel[use], r.t[use], n_v, cfg.gap_factor, cfg.min_gap)
@@ -134,8 +145,13 @@ def prepare_ais(reports: AisReports, coverage: Coverage, cfg: FusionConfig) -> A
     vel_cov = velocity_covariance(tr.course[k], tr.speed[k], np.nan_to_num(tr.std_course[k]) ** 2,
                                   np.nan_to_num(tr.std_speed[k]) ** 2)  # fmt: skip
     states = AisStates(split.vessel[k], r.t[k], pos, vel, pos_cov, vel_cov, limit)
-    names = np.array([str(m) if s == 0 else f"{m}#{s + 1}"
-                      for m, s in zip(split.vessel_mmsi, split.vessel_sub, strict=True)], dtype=str)
+    names = np.array(
+        [
+            str(m) if s == 0 else f"{m}#{s + 1}"
+            for m, s in zip(split.vessel_mmsi, split.vessel_sub, strict=True)
+        ],
+        dtype=str,
+    )
     return AisSide(rows, split.vessel, gap, jump, split.conflict, states, split.vessel_mmsi,
                    names if names.size else np.zeros(0, str))  # fmt: skip
 
@@ -263,7 +279,7 @@ def fuse_picture(reports: AisReports, plots: Plots, setup: RadarSetup,
     prob = np.full(n, np.nan)
     klass = np.zeros(n, np.int8)
     r_cov = np.zeros(n, bool)
-    parts: list[tuple[FloatArray, ...]] = []
+    parts: list[tuple[NDArray[Any], ...]] = []
     scan_times = np.unique(plots.t)
     bounds = np.searchsorted(radar.t, scan_times), np.searchsorted(radar.t, scan_times, "right")
     seconds = np.zeros(scan_times.size)
@@ -280,9 +296,30 @@ def fuse_picture(reports: AisReports, plots: Plots, setup: RadarSetup,
                        if b > a else -1, -1)  # fmt: skip
         parts.append((np.full(res.vessel.size, t), res.vessel, res.pos, res.vessel_covered,
                       trk, res.not_seen))  # fmt: skip
-    cat = [np.concatenate(c) if c else np.zeros(0) for c in zip(*parts, strict=True)] if parts \
+    cat = (
+        [np.concatenate(c) if c else np.zeros(0) for c in zip(*parts, strict=True)]
+        if parts
         else [np.zeros(0), empty, np.zeros((0, 2)), np.zeros(0, bool), empty, np.zeros(0, bool)]
+    )
     origin = (math.degrees(setup.site.lat), math.degrees(setup.site.lon))
     return Picture(radar, r_vessel, prob, klass, r_cov, ais, reports, cat[0],
                    cat[1].astype(np.int64), cat[2].reshape(-1, 2), cat[3].astype(bool),
                    cat[4].astype(np.int64), cat[5].astype(bool), origin, seconds)  # fmt: skip
+
+
+def parse_fusion_config(
+    table: Mapping[str, Any], source: str = "radar config"
+) -> tuple[RadarSetup, FusionConfig]:
+    """The radar (:func:`seatrack.io.radar.parse_radar_config`) and its ``[fusion]``
+    table (:class:`FusionConfig`) from one parsed ``radar.toml``."""
+    rest = dict(table)
+    tab = rest.pop("fusion", {})
+    if not isinstance(tab, Mapping):
+        raise ConfigError(f"{source}: [fusion] must be a table")
+    setup = parse_radar_config(rest, source)
+    return setup, parse_config(FusionConfig, tab, source=f"{source}: fusion")
+
+
+def load_fusion_config(path: str | Path) -> tuple[RadarSetup, FusionConfig]:
+    """:func:`parse_fusion_config` of a ``radar.toml`` file (errors name the file and key)."""
+    return parse_fusion_config(load_toml(path), source=str(path))

@@ -7,7 +7,8 @@
   elapsed time) it is nearest to, among those it can be reached from at a plausible
   speed; a report that fits none starts a new trajectory. Trajectories that end with at
   least ``min_reports`` reports are vessels; when two of them overlap in time, their
-  reports are flagged ``identity_conflict`` and tracked as separate vessels.
+  reports are flagged ``identity_conflict`` and tracked as separate vessels. A report
+  after a silence longer than ``expiry`` continues the MMSI's latest trajectory.
 * **Jump** -- a report that fits no trajectory and whose new trajectory stays shorter
   than ``min_reports`` reports is an implausible position (flagged ``jump``, not tracked);
   when the new trajectory lasts but does not overlap the old one (the stream moved for
@@ -96,7 +97,9 @@ def _follow(
         if best < 0:
             alive = [j for j, k in enumerate(last) if t[i] - t[k] <= cfg.expiry]
             moved[i] = bool(alive)
-            if len(alive) >= cfg.max_trajectories:  # no room: the stalest one is replaced
+            if not alive and last:  # after a long silence: the same vessel, continued
+                best = max(range(len(last)), key=lambda j: t[last[j]])
+            elif len(alive) >= cfg.max_trajectories:  # no room: the stalest one is replaced
                 best = min(alive, key=lambda j: t[last[j]])
             else:
                 best = len(last)

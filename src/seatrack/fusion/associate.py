@@ -108,6 +108,11 @@ class FusionConfig:
         doc="an AIS vessel inside coverage without a radar track this long is not seen",
         min=0.0, max=1e5,
     )  # fmt: skip
+    edge_margin: float = param(
+        500.0, key="edge_margin_m", unit="m",
+        doc="not seen only this far inside the edges of coverage (range, horizon, sectors, land)",
+        min=0.0, max=1e5,
+    )  # fmt: skip
     min_detection_probability: float = param(
         0.5, doc="not seen only where the radar's detection probability is at least this",
         min=0.0, max=1.0,

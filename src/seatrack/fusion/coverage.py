@@ -204,9 +204,16 @@ class Coverage:
         """Radar horizon (m) of the site's antenna and target heights."""
         return float(radar_horizon_m(self.site.antenna_height, self.site.target_height))
 
-    def covered(self, x: ArrayLike, y: ArrayLike) -> BoolArray:
-        """Whether the radar can see a target at each point (East ``x``, North ``y``, m)."""
+    def covered(self, x: ArrayLike, y: ArrayLike, margin_m: float = 0.0) -> BoolArray:
+        """Whether the radar can see a target at each point (East ``x``, North ``y``, m);
+        with ``margin_m``, also at the four points ``margin_m`` East, West, North and South
+        of it (well inside coverage, not on its edge)."""
         xa, ya = np.broadcast_arrays(np.asarray(x, float), np.asarray(y, float))
+        if margin_m > 0:
+            ok = self.covered(xa, ya)
+            for dx, dy in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+                ok &= self.covered(xa + dx * margin_m, ya + dy * margin_m)
+            return ok
         r = np.hypot(xa, ya)
         s = self.site
         ok = (r >= s.min_range) & (r <= min(s.max_range, self.horizon_m)) & np.isfinite(r)

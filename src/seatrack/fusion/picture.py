@@ -10,9 +10,9 @@
 
    * a radar track with an AIS vessel is ``ais``; one inside coverage that has had none
      for ``dark_delay_s`` is ``dark``; otherwise (outside coverage, or waiting) ``unknown``;
-   * an AIS vessel inside coverage (where the detection probability is at least
-     ``min_detection_probability``) that has had no radar track for ``not_seen_delay_s``
-     is ``not_seen``.
+   * an AIS vessel inside coverage by at least ``edge_margin_m`` (where the detection
+     probability is at least ``min_detection_probability``) that has had no radar track
+     for ``not_seen_delay_s`` is ``not_seen``.
 """
 
 from __future__ import annotations
@@ -244,7 +244,8 @@ class Fusion:
         m = pred.vessel.size
         radar_row = np.full(m, -1, np.int64)
         radar_row[a.ais_row[has]] = np.flatnonzero(has)
-        v_cov = self.coverage.covered(pred.pos[:, 0], pred.pos[:, 1]) & self._detect_ok
+        v_cov = self.coverage.covered(pred.pos[:, 0], pred.pos[:, 1], cfg.edge_margin)
+        v_cov &= self._detect_ok
         vclock = self._vessel_clock
         was_active = np.zeros(self.states.n_vessels, bool)
         was_active[np.flatnonzero(np.isfinite(vclock))] = True

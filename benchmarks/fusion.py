@@ -22,8 +22,8 @@
      is the truth vessel's (target >= 99 %);
    * dark: precision and recall of ``class == dark`` over matched rows, a row truly dark
      when its vessel has no AIS at its true position (dark, not yet reported, silent, or
-     spoofed at that time); rows within 60 s of a track's start or of a change of the truth class are not
-     counted (target: >= 0.95 each, i.e. detected within 60 s); and the time from going
+     spoofed at that time); rows within 60 s of a track's start or of a change of the
+     truth class are not counted (target: >= 0.95 each, i.e. detected within 60 s); and the time from going
      dark (or from the track's start, if later) to the first ``dark`` row;
    * spoofed: precision and recall of ``not_seen`` over AIS vessel rows inside coverage,
      positive while the vessel's AIS is moved (60 s grace after the move) (>= 0.95);
@@ -98,8 +98,8 @@ def real_truth() -> tuple[sc.Truth, np.ndarray]:
     first = np.r_[True, (mmsi[1:] != mmsi[:-1]) | (np.diff(t) > 0)]
     mmsi, t, xy = mmsi[first], t[first], xy[first]
     # a real identity collision (two ships on one MMSI) has no knowable truth: left out
-    fast = np.r_[False, (mmsi[1:] == mmsi[:-1])
-                 & (np.hypot(*np.diff(xy, axis=0).T) > 50 * KNOT_MPS * np.diff(t) + 500.0)]  # fmt: skip
+    step = np.hypot(*np.diff(xy, axis=0).T)
+    fast = np.r_[False, (mmsi[1:] == mmsi[:-1]) & (step > 50 * KNOT_MPS * np.diff(t) + 500.0)]
     keep = ~np.isin(mmsi, mmsi[fast])
     mmsi, t, xy = mmsi[keep], t[keep], xy[keep]
     ids, vessel = np.unique(mmsi, return_inverse=True)
@@ -226,8 +226,10 @@ def evaluate(scene: Scene, truth: sc.Truth) -> dict[str, float]:
     # time to detect: per episode, from going dark (or the track's start, if later) to
     # the first dark row of the vessel's tracks
     lat: list[float] = []
-    episodes = [(v, -np.inf) for v in c.dark] + list(zip(c.silent, c.silent_start)) + list(
-        zip(c.spoof, c.spoof_start)
+    episodes = (
+        [(v, -np.inf) for v in c.dark]
+        + list(zip(c.silent, c.silent_start))
+        + list(zip(c.spoof, c.spoof_start))
     )
     for v, s0 in episodes:
         rows = np.flatnonzero((match == v) & dark_true & (r.t >= s0))
@@ -247,7 +249,9 @@ def evaluate(scene: Scene, truth: sc.Truth) -> dict[str, float]:
         mm = tv == x
         spoofed[mm] = pic.v_time[mm] >= s
         grace[mm] = (pic.v_time[mm] >= s) & (pic.v_time[mm] < s + GRACE_S)
-    first_seen = {int(v): float(pic.v_time[pic.v_vessel == v].min()) for v in np.unique(pic.v_vessel)}
+    first_seen = {
+        int(v): float(pic.v_time[pic.v_vessel == v].min()) for v in np.unique(pic.v_vessel)
+    }
     fresh = pic.v_time - np.array([first_seen[int(v)] for v in pic.v_vessel]) < GRACE_S
     # a vessel's truth ends where its data ends: its AIS predicted beyond is not judged
     v_end = np.array([truth.t[truth.vessel == v].max() for v in range(truth.mmsi.size)])
@@ -309,8 +313,10 @@ def main() -> None:
     setup, cfg = parse_fusion_config(SITE, "benchmark site")
     cov = Coverage.of(setup.site, cfg.land_mask, cfg.land_cell)
     real, interval = real_truth()
-    print(f"truth: {real.mmsi.size} vessels, {real.t.size} smoothed states, median reporting "
-          f"interval {np.median(interval):.0f} s; radar horizon {cov.horizon_m / 1000:.1f} km")
+    print(
+        f"truth: {real.mmsi.size} vessels, {real.t.size} smoothed states, median reporting "
+        f"interval {np.median(interval):.0f} s; radar horizon {cov.horizon_m / 1000:.1f} km"
+    )
     head = ("seed", "identity", "dark P", "dark R", "detect med/max s", "<=60s", "spoof P",
             "spoof R", "shared", "ms/scan", "run s")  # fmt: skip
     print(" | ".join(head))
@@ -325,12 +331,16 @@ def main() -> None:
               f"{e['detect_within_60s']:.2f} | {e['spoof_precision']:.3f} | "
               f"{e['spoof_recall']:.3f} | {100 * e['shared']:.1f} % | {e['per_scan_ms']:.2f} | "
               f"{e['seconds']:.0f}", flush=True)  # fmt: skip
-    print("targets: identity >= 99 %, dark P/R >= 0.95 (within 60 s), spoof P/R >= 0.95, "
-          "shared >= 95 %")
+    print(
+        "targets: identity >= 99 %, dark P/R >= 0.95 (within 60 s), spoof P/R >= 0.95, "
+        "shared >= 95 %"
+    )
     if not args.quick:
         s = speed(cov, cfg)
-        print(f"fusion step, 1,000 vessels: median {1e3 * np.median(s):.1f} ms, "
-              f"95th percentile {1e3 * np.percentile(s, 95):.1f} ms per scan (target <= 20 ms)")
+        print(
+            f"fusion step, 1,000 vessels: median {1e3 * np.median(s):.1f} ms, "
+            f"95th percentile {1e3 * np.percentile(s, 95):.1f} ms per scan (target <= 20 ms)"
+        )
 
 
 if __name__ == "__main__":

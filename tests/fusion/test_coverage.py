@@ -100,3 +100,12 @@ def test_bundled_coast_shadows_inland_points() -> None:
     inland = cov.covered_geodetic(np.array([57.70]), np.array([12.20]))
     open_sea = cov.covered_geodetic(np.array([57.55]), np.array([11.30]))
     assert not inland[0] and open_sea[0]
+
+
+def test_margin_keeps_points_off_the_edges() -> None:
+    site = _site(max_range=20000.0, blind_sectors=((math.radians(80.0), math.radians(100.0)),))
+    cov = Coverage.of(site, land=False)
+    x = np.array([0.0, 0.0, 2000.0, 5000.0])
+    y = np.array([19800.0, 19000.0, 5000.0, 1000.0])  # near max range; inside; 22 deg; ~79 deg
+    assert cov.covered(x, y).tolist() == [True, True, True, True]
+    assert cov.covered(x, y, margin_m=500.0).tolist() == [False, True, True, False]

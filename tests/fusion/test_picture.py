@@ -115,3 +115,17 @@ def test_fusion_keys_are_checked() -> None:
     with pytest.raises(ConfigError, match=r"\[fusion\] must be a table"):
         parse_fusion_config({"lat_deg": 56.0, "lon_deg": 7.0, "fusion": 3})
     assert math.isclose(parse_fusion_config({"lat_deg": 1.0, "lon_deg": 2.0})[1].gate, 16.0)
+
+
+def test_track_covariance_lies_along_the_line_of_sight() -> None:
+    from seatrack.filters.base import SensorNoise
+    from seatrack.fusion.picture import track_covariance
+
+    s = SensorNoise(sigma_range=20.0, sigma_azimuth=math.radians(0.3))
+    pos = np.array([[30000.0 / math.sqrt(2), 30000.0 / math.sqrt(2)]])
+    c = track_covariance(pos, np.array([100.0]), np.array([100.0]), s)[0]
+    assert np.allclose(c, c.T) and np.trace(c) == pytest.approx(2e4)
+    w, v = np.linalg.eigh(c)
+    # small axis along the line of sight (bearing 45 deg), ratio (r s_az / s_r)^2
+    assert abs(abs(v[:, 0] @ pos[0]) / 30000.0 - 1.0) < 1e-9
+    assert w[1] / w[0] == pytest.approx((30000.0 * math.radians(0.3) / 20.0) ** 2)

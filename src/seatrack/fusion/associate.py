@@ -86,9 +86,9 @@ class FusionConfig:
         2.0, key="sigma_latency_s", unit="s", doc="allowance for AIS time-stamp latency",
         min=0.0, max=600.0,
     )  # fmt: skip
-    sigma_accel: float = param(
-        0.05, key="sigma_accel_mps2", unit="m/s^2",
-        doc="white-acceleration spectral density (m^2/s^3 numerically) of the AIS prediction",
+    accel_density: float = param(
+        0.05, key="accel_density_m2ps3", unit="m^2/s^3",
+        doc="white-acceleration density q of the AIS prediction (variance grows as q dt^3/3)",
         min=0.0, max=100.0,
     )  # fmt: skip
     max_score: float = param(
@@ -210,7 +210,7 @@ def predict_ais(states: AisStates, t: float, cfg: FusionConfig) -> Prediction:
     cov = (
         states.pos_cov[k]
         + states.vel_cov[k] * a2
-        + (cfg.sigma_accel * age**3 / 3.0)[:, None, None] * eye
+        + (cfg.accel_density * age**3 / 3.0)[:, None, None] * eye
         + cfg.sigma_antenna_offset**2 * eye
         + cfg.sigma_latency**2 * np.einsum("ni,nj->nij", vel, vel)
     )

@@ -23,8 +23,9 @@
    * dark: precision and recall of ``class == dark`` over matched rows, a row truly dark
      when its vessel has no AIS at its true position (dark, not yet reported, silent, or
      spoofed at that time); rows within 60 s of a track's start or of a change of the
-     truth class are not counted (target: >= 0.95 each, i.e. detected within 60 s); and the time from going
-     dark (or from the track's start, if later) to the first ``dark`` row;
+     truth class are not counted (target: >= 0.95 each, i.e. detected within 60 s); and
+     the time from going dark (or from the track's start, if later) to the first ``dark``
+     row;
    * spoofed: precision and recall of ``not_seen`` over AIS vessel rows inside coverage,
      positive while the vessel's AIS is moved (60 s grace after the move) (>= 0.95);
    * shared: the share of the shared MMSIs' reports given to the right one of the two

@@ -310,8 +310,13 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seeds", type=int, nargs="*", default=[1, 2, 3, 4, 5])
     ap.add_argument("--quick", action="store_true", help="skip the speed case")
+    ap.add_argument("--fusion", nargs="*", default=[], metavar="KEY=VALUE",
+                    help="[fusion] keys to change (numbers), e.g. dark_delay_s=5")  # fmt: skip
     args = ap.parse_args()
-    setup, cfg = parse_fusion_config(SITE, "benchmark site")
+    keys = {k: float(v) for k, v in (kv.split("=", 1) for kv in args.fusion)}
+    setup, cfg = parse_fusion_config({**SITE, "fusion": keys}, "benchmark site")
+    if keys:
+        print(f"[fusion] changed: {keys}")
     cov = Coverage.of(setup.site, cfg.land_mask, cfg.land_cell)
     real, interval = real_truth()
     print(

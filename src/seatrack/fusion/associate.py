@@ -99,7 +99,7 @@ class FusionConfig:
         max=1e4,
     )  # fmt: skip
     dark_delay: float = param(
-        10.0, key="dark_delay_s", unit="s",
+        4.0, key="dark_delay_s", unit="s",
         doc="a radar track without an AIS vessel this long (inside coverage) is dark",
         min=0.0, max=1e5,
     )  # fmt: skip
@@ -118,7 +118,7 @@ class FusionConfig:
         min=0.0, max=1.0,
     )  # fmt: skip
     gap_factor: float = param(
-        3.0, doc="a gap: silent longer than this many own median reporting intervals",
+        2.5, doc="a gap: silent longer than this many own median reporting intervals",
         min=1.0, max=1000.0,
     )  # fmt: skip
     min_gap: float = param(

@@ -4,7 +4,8 @@
    (:mod:`seatrack.io.multitarget`), in the radar's East-North plane.
 2. The AIS reports are brought to the same plane (:meth:`Coverage.to_local`), shared MMSIs
    split and jumps removed (:mod:`~seatrack.fusion.anomalies`), and every vessel tracked
-   by the project's AIS tracker (:func:`seatrack.filters.ais.track_reports`).
+   by the project's AIS tracker (:func:`seatrack.filters.ais.track_reports`, forward
+   filter only, so that each state uses the reports up to its time).
 3. At every radar scan :class:`Fusion` predicts the AIS vessels, associates them with the
    radar tracks (:mod:`~seatrack.fusion.associate`) and classes both sides:
 
@@ -30,6 +31,7 @@ from numpy.typing import NDArray
 from seatrack.config import ConfigError
 from seatrack.config import load_toml
 from seatrack.config import parse_config
+from seatrack.filters.ais import AisTrackerConfig
 from seatrack.filters.ais import track_reports
 from seatrack.filters.ais.kernel import OutlierKind
 from seatrack.filters.ais.tracks import AisTracks
@@ -152,7 +154,8 @@ def prepare_ais(reports: AisReports, coverage: Coverage, cfg: FusionConfig) -> A
     kept = np.flatnonzero(use)
     sub = r.take(kept)
     sub.mmsi = split.vessel[kept]  # each trajectory its own vessel
-    tr = _scatter(track_reports(sub), kept, r.t.size)
+    # the forward filter (no smoother): a state uses only the reports up to its own
+    tr = _scatter(track_reports(sub, AisTrackerConfig(smooth=False)), kept, r.t.size)
     bad = np.isin(
         tr.outlier_kind, [OutlierKind.IMPLAUSIBLE_JUMP, OutlierKind.IMPLAUSIBLE_AFTER_GAP]
     )

@@ -192,7 +192,7 @@ def _prf(pred: np.ndarray, true: np.ndarray) -> tuple[float, float, int, int]:
             int(true.sum()))  # fmt: skip
 
 
-def evaluate(scene: Scene, truth: sc.Truth) -> dict[str, float]:
+def evaluate(scene: Scene, truth: sc.Truth) -> dict[str, Any]:
     pic, c = scene.picture, scene.corruption
     r = pic.radar
     match = np.full(r.t.size, -1, np.int64)
@@ -221,7 +221,7 @@ def evaluate(scene: Scene, truth: sc.Truth) -> dict[str, float]:
     settled = m & (r.t - np.maximum(start, change) >= GRACE_S)
     named = m & (pic.radar_vessel >= 0) & ~dark_true
     right = true_of[np.maximum(pic.radar_vessel, 0)] == match
-    out: dict[str, float] = {"identity": float(right[named].mean())}
+    out: dict[str, Any] = {"identity": float(right[named].mean()), "named_rows": int(named.sum())}
     p, rc, npred, ntrue = _prf((pic.klass == 2)[settled], dark_true[settled])
     out.update(dark_precision=p, dark_recall=rc, dark_rows=ntrue)
     # time to detect: per episode, from going dark (or the track's start, if later) to
@@ -239,6 +239,8 @@ def evaluate(scene: Scene, truth: sc.Truth) -> dict[str, float]:
         onset = np.maximum(start[rows], s0).min()
         hit = rows[pic.klass[rows] == 2]
         lat.append(float(r.t[hit].min() - onset) if hit.size else math.inf)
+    out["episodes"] = len(lat)
+    out["sizes"] = f"{len(c.dark)}/{len(c.silent)}/{len(c.spoof)}/{len(c.shared)}"
     out["detect_median_s"] = float(np.median(lat)) if lat else math.nan
     out["detect_max_s"] = float(np.max(lat)) if lat else math.nan
     out["detect_within_60s"] = float(np.mean(np.array(lat) <= 60.0)) if lat else math.nan
@@ -323,8 +325,10 @@ def main() -> None:
         f"truth: {real.mmsi.size} vessels, {real.t.size} smoothed states, median reporting "
         f"interval {np.median(interval):.0f} s; radar horizon {cov.horizon_m / 1000:.1f} km"
     )
-    head = ("seed", "identity", "dark P", "dark R", "detect med/max s", "<=60s", "spoof P",
-            "spoof R", "shared", "ms/scan", "run s")  # fmt: skip
+    head = ("seed", "dark/silent/spoofed/shared pairs", "identity (rows)", "dark P", "dark R",
+            "(rows)", "detect med/max s", "<=60s (episodes)", "spoof P", "spoof R", "(rows)",
+            "shared", "ms/scan", "run s")  # fmt: skip
+    print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     print(" | ".join(head))
     rows = []
     for seed in args.seeds:
@@ -332,11 +336,12 @@ def main() -> None:
         e = evaluate(scene, truth)
         rows.append(e)
         tag = f"{seed}{' (tuned)' if seed in TUNED_SEEDS else ''}"
-        print(f"{tag} | {100 * e['identity']:.2f} % | {e['dark_precision']:.3f} | "
-              f"{e['dark_recall']:.3f} | {e['detect_median_s']:.0f}/{e['detect_max_s']:.0f} | "
-              f"{e['detect_within_60s']:.2f} | {e['spoof_precision']:.3f} | "
-              f"{e['spoof_recall']:.3f} | {100 * e['shared']:.1f} % | {e['per_scan_ms']:.2f} | "
-              f"{e['seconds']:.0f}", flush=True)  # fmt: skip
+        print(f"{tag} | {e['sizes']} | {100 * e['identity']:.2f} % ({e['named_rows']}) | "
+              f"{e['dark_precision']:.3f} | {e['dark_recall']:.3f} | ({e['dark_rows']}) | "
+              f"{e['detect_median_s']:.0f}/{e['detect_max_s']:.0f} | "
+              f"{e['detect_within_60s']:.2f} ({e['episodes']}) | {e['spoof_precision']:.3f} | "
+              f"{e['spoof_recall']:.3f} | ({e['spoof_rows']}) | {100 * e['shared']:.1f} % | "
+              f"{e['per_scan_ms']:.2f} | {e['seconds']:.0f}", flush=True)  # fmt: skip
     print(
         "targets: identity >= 99 %, dark P/R >= 0.95 (within 60 s), spoof P/R >= 0.95, "
         "shared >= 95 %"
@@ -345,7 +350,8 @@ def main() -> None:
         s = speed(cov, cfg)
         print(
             f"fusion step, 1,000 vessels: median {1e3 * np.median(s):.1f} ms, "
-            f"95th percentile {1e3 * np.percentile(s, 95):.1f} ms per scan (target <= 20 ms)"
+            f"95th percentile {1e3 * np.percentile(s, 95):.1f} ms per scan (target <= 20 ms); "
+            f"load average {os.getloadavg()[0]:.1f}"
         )
 
 

@@ -15,7 +15,10 @@ def register(app: typer.Typer) -> None:
     @app.command("fuse")
     def fuse(
         ais: list[Path] = typer.Option(
-            ..., "--ais", help="AIS file(s) in any format `seatrack ais` reads (repeatable)"
+            ...,
+            "--ais",
+            metavar="FILE",
+            help="AIS file in any format `seatrack ais` reads (repeat for several)",
         ),
         plots: Path = typer.Option(
             ..., "--plots", help="unlabelled plot CSV: time_s (Unix time), range_m, azimuth_deg"

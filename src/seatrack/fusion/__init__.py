@@ -6,5 +6,7 @@
   trajectories, implausible jumps;
 * :mod:`~seatrack.fusion.associate` -- radar tracks and AIS vessels associated scan by
   scan, with hysteresis;
-* :mod:`~seatrack.fusion.picture` -- the whole run: the tables of the picture.
+* :mod:`~seatrack.fusion.picture` -- the whole run: the tables of the picture;
+* :mod:`~seatrack.fusion.scenario` -- simulated plots and corrupted AIS for tests and the
+  benchmark.
 """

@@ -57,3 +57,13 @@ def test_gap_limit_follows_the_own_reporting_rate() -> None:
     assert limit.tolist() == [30.0, 540.0]
     gaps = reporting_gaps(vessel, t, limit)
     assert np.flatnonzero(gaps).tolist() == [50]  # 98 s -> 400 s; the 180 s vessel is fine
+
+
+def test_a_long_silence_continues_the_vessel_only_within_reach() -> None:
+    t = np.r_[np.arange(0.0, 100.0, 10.0), np.arange(2000.0, 2100.0, 10.0)]
+    xy = _line(t, 0.0, 0.0, 5.0)  # 2 km/400 s: resumes where the vessel can be
+    s = split_identities(np.full(t.size, 4), t, xy, np.full(t.size, 9.72), np.full(t.size, 90.0))
+    assert s.vessel_mmsi.size == 1 and not s.jump.any()
+    xy[10:, 1] += 1e6  # 1000 km away after 1900 s: not reachable at 50 kn
+    s = split_identities(np.full(t.size, 4), t, xy, np.full(t.size, 9.72), np.full(t.size, 90.0))
+    assert s.vessel_mmsi.size == 2 and np.flatnonzero(s.jump).tolist() == [10]

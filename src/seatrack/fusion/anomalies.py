@@ -8,7 +8,8 @@
   speed; a report that fits none starts a new trajectory. Trajectories that end with at
   least ``min_reports`` reports are vessels; when two of them overlap in time, their
   reports are flagged ``identity_conflict`` and tracked as separate vessels. A report
-  after a silence longer than ``expiry`` continues the MMSI's latest trajectory.
+  after a silence longer than ``expiry`` continues the MMSI's latest trajectory when it
+  can be reached from there at a plausible speed.
 * **Jump** -- a report that fits no trajectory and whose new trajectory stays shorter
   than ``min_reports`` reports is an implausible position (flagged ``jump``, not tracked);
   when the new trajectory lasts but does not overlap the old one (the stream moved for
@@ -96,9 +97,15 @@ def _follow(
                 best, best_err = j, err
         if best < 0:
             alive = [j for j, k in enumerate(last) if t[i] - t[k] <= cfg.expiry]
-            moved[i] = bool(alive)
-            if not alive and last:  # after a long silence: the same vessel, continued
-                best = max(range(len(last)), key=lambda j: t[last[j]])
+            latest = max(range(len(last)), key=lambda j: t[last[j]]) if last else -1
+            reach = (
+                latest >= 0
+                and float(np.hypot(*(xy[i] - xy[last[latest]])))
+                <= cfg.max_speed * (t[i] - t[last[latest]]) + cfg.slack
+            )
+            moved[i] = bool(alive) or (latest >= 0 and not reach)
+            if not alive and reach:  # after a long silence, within reach: continued
+                best = latest
             elif len(alive) >= cfg.max_trajectories:  # no room: the stalest one is replaced
                 best = min(alive, key=lambda j: t[last[j]])
             else:

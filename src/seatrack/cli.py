@@ -46,6 +46,7 @@ COMMAND_MODULES = [
     "seatrack.commands.ais",
     "seatrack.commands.live",
     "seatrack.commands.replay",
+    "seatrack.commands.fuse",
 ]
 
 app = typer.Typer(

@@ -99,6 +99,8 @@ def register(app: typer.Typer) -> None:
         from seatrack.simulate.scenarios import resolve_scenario
 
         sc = load_scenario(resolve_scenario(scenario))
+        option_in("--runs", sc.runs if runs is None else runs, 1, MAX_RUNS)
+        option_in("--processes", processes, 1, MAX_PROCESSES)
         if sc.multitarget is not None:  # unlabelled plots: the multi-target tracker
             from seatrack.evaluate.multitarget import evaluate_multitarget
 

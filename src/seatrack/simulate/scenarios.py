@@ -123,6 +123,9 @@ _SIGMA_KEYS = {
     "elevation": ("elevation_deg", math.pi / 180.0),
     "range_rate": ("range_rate_mps", 1.0),
 }
+#: smallest sensor noise sigma, in the file's unit (deg, m, m/s): below it the noise
+#: covariance and its inverse leave the floating-point range (no sensor is that precise)
+MIN_SIGMA = 1e-6
 #: most samples on one time grid (truth, or one sensor's scans) in a simulated run
 MAX_SAMPLES = 1_000_000
 #: most samples of all platforms on all grids in a simulated run (bounds memory: ~1 GB)
@@ -532,7 +535,8 @@ def _sensor(r: TomlReader, raw: Any, prefix: str, index: int, duration: float) -
     sp = join_key(prefix, "sigma")
     r.check_keys(sig_tab, sp, [_SIGMA_KEYS[c][0] for c in comps])
     sigma = tuple(
-        r.req(sig_tab, sp, _SIGMA_KEYS[c][0], positive=True) * _SIGMA_KEYS[c][1] for c in comps
+        r.req(sig_tab, sp, _SIGMA_KEYS[c][0], positive=True, minimum=MIN_SIGMA) * _SIGMA_KEYS[c][1]
+        for c in comps
     )
     eps = r.number(tab, prefix, "epsilon", default=0.0, minimum=0.0, maximum=1.0)
     scale_raw = tab.get("outlier_scale", 1.0)

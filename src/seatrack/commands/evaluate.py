@@ -92,13 +92,16 @@ def register(app: typer.Typer) -> None:
         """
         from seatrack.evaluate.tracking import compare_methods
         from seatrack.evaluate.tracking import position_crb
+        from seatrack.evaluate.tracking import require_evaluation
         from seatrack.evaluate.tracking import summarize
         from seatrack.evaluate.tracking import tracking_sensor
         from seatrack.simulate.scenarios import MAX_RUNS
         from seatrack.simulate.scenarios import load_scenario
         from seatrack.simulate.scenarios import resolve_scenario
 
-        sc = load_scenario(resolve_scenario(scenario))
+        source = resolve_scenario(scenario)
+        prepare_outputs({"--csv": csv_out}, {"--plots": plots}, inputs=[source])
+        sc = load_scenario(source)
         option_in("--runs", sc.runs if runs is None else runs, 1, MAX_RUNS)
         option_in("--processes", processes, 1, MAX_PROCESSES)
         if sc.multitarget is not None:  # unlabelled plots: the multi-target tracker
@@ -119,6 +122,7 @@ def register(app: typer.Typer) -> None:
         except ValueError as exc:
             raise InputError(f"{'--sensor' if sensor is not None else sc.path}: {exc}") from None
         check_skip(skip, sens.scan_times(sc.duration).size, sens.name)
+        require_evaluation(sc, sens, names, n, processes)
         pngs = [plots / "pos_rmse.png", plots / "anees.png"] if plots is not None else []
         prepare_outputs([csv_out, *pngs], [plots])
         errors = trial_errors(sc, sens, names, s)

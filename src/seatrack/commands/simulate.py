@@ -145,7 +145,9 @@ def register(app: typer.Typer) -> None:
         from seatrack.simulate.scenarios import load_scenario
         from seatrack.simulate.scenarios import resolve_scenario
 
-        sc = load_scenario(resolve_scenario(scenario))
+        source = resolve_scenario(scenario)
+        prepare_outputs({}, {"--out": out}, inputs=[source])
+        sc = load_scenario(source)
         rng = seeded_rng(sc.seed if seed is None else seed, run)
         if sc.multitarget is not None:  # unlabelled plots for the multi-target tracker
             written = write_multitarget(sc, rng, out)

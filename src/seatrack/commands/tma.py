@@ -94,8 +94,8 @@ def register(app: typer.Typer) -> None:
     ) -> None:
         """Bearings-only TMA (DE 3446658): position, course and speed of every contact with
         1-sigma / 95 % values, support values, multi-leg targets and an observability check."""
+        from seatrack.commands.options import prepare_outputs
         from seatrack.io.atomic import atomic_write
-        from seatrack.io.atomic import check_output_path
         from seatrack.io.tma import read_bearings
         from seatrack.io.tma import read_support
         from seatrack.io.tma import result_json
@@ -107,11 +107,8 @@ def register(app: typer.Typer) -> None:
             raise InputError(
                 f"--sigma-deg must be a number of degrees in (0, 180), got {sigma_deg}"
             )
-        if out is not None and plot is not None and out.resolve() == plot.resolve():
-            raise InputError(f"--out and --plot name the same file {out}")
-        for path in (out, plot):
-            if path is not None:
-                check_output_path(path)  # before any work
+        outputs = {"--out": out, "--plot": plot}
+        prepare_outputs(outputs, inputs=[bearings, support], images=["--plot"])
         sigma = math.radians(sigma_deg)
         contacts = read_bearings(bearings, default_sigma=sigma)
         sup = read_support(support) if support is not None else {}

@@ -115,6 +115,8 @@ def register(app: typer.Typer) -> None:
         from seatrack.io.plots import read_plots
 
         method_class(method)  # unknown method: fail before any work
+        outputs = {"--out": out, "--plots-out": plots_out, "--plot": plot}
+        prepare_outputs(outputs, inputs=[plots_csv, config], images=["--plot"])
         if not has_track_column(plots_csv):
             typer.echo(
                 track_unlabelled(

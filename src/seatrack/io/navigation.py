@@ -28,7 +28,15 @@ from seatrack.navigation.navigator import NavResult
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["read_echoes", "write_echoes", "read_gyro", "write_gyro", "write_nav", "NAV_COLUMNS"]
+__all__ = [
+    "require_navigation",
+    "read_echoes",
+    "write_echoes",
+    "read_gyro",
+    "write_gyro",
+    "write_nav",
+    "NAV_COLUMNS",
+]
 
 NAV_COLUMNS = (
     "time_s",
@@ -124,3 +132,29 @@ def write_nav(path: str | Path, res: NavResult) -> None:
     fmt = ["%.3f", "%.2f", "%.2f", "%.3f", "%.3f", "%.3f", "%.4f", "%.2f", "%.2f", "%.3f"]
     with atomic_write(path) as fh:
         np.savetxt(fh, data, fmt=fmt, delimiter=",", header=",".join(NAV_COLUMNS), comments="")
+
+
+#: peak bytes per predictor tick of a navigation run: the state, its sigmas and time
+#: (104 bytes) in the loop, the result and the NAV.csv text being written
+NAV_BYTES_PER_TICK = 500
+#: seconds per predictor tick of the navigation loop (about 94 us measured on a 2-core
+#: machine over a 1.5e6 s log)
+NAV_SECONDS_PER_TICK = 1e-4
+
+
+def require_navigation(echoes: Echoes, antenna_period_s: float, steps_per_rev: int) -> None:
+    """Refuse a navigation run over the memory or time budget (:mod:`seatrack.io.budget`),
+    from the span of the echo log: one predictor tick per ``antenna_period_s /
+    steps_per_rev`` seconds, however few the echoes (a gap costs as much as a log)."""
+    from seatrack.io.budget import require
+
+    t = np.asarray(echoes.t, float)
+    if t.size < 2:
+        return
+    span = float(t.max() - t.min())
+    ticks = span * steps_per_rev / antenna_period_s
+    require(
+        f"{echoes.source}: the echo log spans {span:g} s, {ticks:.3g} filter cycles",
+        memory_bytes=ticks * NAV_BYTES_PER_TICK,
+        seconds=ticks * NAV_SECONDS_PER_TICK,
+    )

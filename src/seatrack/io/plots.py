@@ -28,11 +28,13 @@ from numpy.typing import NDArray
 
 from seatrack.filters.base import Plots
 from seatrack.io.table import MAX_DISTANCE_M
+from seatrack.io.table import MAX_TEXT_CHARS
 from seatrack.io.table import MAX_TIME_S
 from seatrack.io.table import InputError
 from seatrack.io.table import Table
 from seatrack.io.table import check_times
 from seatrack.io.table import read_csv_table
+from seatrack.io.table import read_input_bytes
 
 FloatArray = NDArray[np.float64]
 
@@ -102,14 +104,14 @@ def _read_fast(path: Path) -> Table | None:
     lines, quoted line breaks, padded or empty required cells, text in number columns,
     literal NaN/inf...), which the row-by-row reader then reports with its line."""
     import pyarrow as pa
+    import pyarrow.compute as pc
     import pyarrow.csv as pacsv
 
-    try:
-        data = path.read_bytes()
-    except OSError:
-        return None
+    data = read_input_bytes(path)  # within the memory budget, decompressed
     head = data.split(b"\n", 1)[0].decode("utf-8-sig", "replace").rstrip("\r").split(",")
     if any(h != h.strip() for h in head) or not set(PLOT_COLUMNS) <= set(head):
+        return None
+    if len(set(head)) != len(head):  # a column named twice: reported by the row reader
         return None
     present = [c for c in (*PLOT_COLUMNS, *_OPTIONAL) if c in head]
     types = {c: (pa.string() if c == "track" else pa.float64()) for c in present}
@@ -129,6 +131,9 @@ def _read_fast(path: Path) -> Table | None:
     for c in present:
         col = table.column(c)
         if c == "track":
+            longest = pc.max(pc.utf8_length(col)).as_py() or 0
+            if longest > MAX_TEXT_CHARS:  # reported with its line by the row reader
+                return None
             labels = np.asarray(col.to_pylist(), dtype=str)
             if (np.char.strip(labels) != labels).any():
                 return None

@@ -92,6 +92,7 @@ from seatrack.simulate.trajectories import trajectory
 FloatArray = NDArray[np.float64]
 
 __all__ = [
+    "expected_targets",
     "SENSOR_TYPES",
     "Platform",
     "SensorConfig",
@@ -656,20 +657,39 @@ def parse_scenario(doc: Mapping[str, Any], path: str = "<scenario>") -> Scenario
     assert dt is not None
     if dt > duration:
         raise r.error("dt_s", f"longer than duration_s ({duration:g} s)")
-    _check_work(r, duration, dt, len(targets), sensors)
-    extra = _method_tables(r, doc.get("evaluate", {}))
     mt = doc.get("multitarget")
     population = None if mt is None else parse_multitarget(r.table(mt, "multitarget"), path)
+    _check_work(r, duration, dt, len(targets), sensors, population)
+    extra = _method_tables(r, doc.get("evaluate", {}))
     return Scenario(
         name, duration, dt, own, targets, sensors, seed, runs, description, path, extra, population
     )
 
 
+def expected_targets(population: TargetPopulation | None, duration: float, scan_s: float) -> float:
+    """Targets a ``[multitarget]`` population is expected to hold over a run: those at the
+    start, the crossing pairs and the births at ``births_per_scan`` per scan of ``scan_s``."""
+    if population is None:
+        return 0.0
+    n_scans = math.floor(duration / scan_s + 1e-9) + 1
+    p = population
+    return p.targets + 2 * p.crossings + p.births_per_scan * n_scans
+
+
 def _check_work(
-    r: TomlReader, duration: float, dt: float, n_targets: int, sensors: Sequence[SensorConfig]
+    r: TomlReader,
+    duration: float,
+    dt: float,
+    n_scripted: int,
+    sensors: Sequence[SensorConfig],
+    population: TargetPopulation | None = None,
 ) -> None:
-    """Bound the memory and time one simulated run takes, before anything is allocated."""
-    total = 0
+    """Bound the memory and time one simulated run takes, before anything is allocated
+    (the scripted targets and the expected ones of a ``[multitarget]`` population)."""
+    fastest = min((s.scan_period for s in sensors), default=dt)
+    born = expected_targets(population, duration, fastest)
+    n_targets = n_scripted + born
+    total = 0.0
     for i, s in enumerate(sensors):
         n = math.floor(duration / s.scan_period + 1e-9) + 1
         kp = f"sensors[{i}]"
@@ -693,9 +713,10 @@ def _check_work(
     total += n_truth * (n_targets + 1)
     if total > MAX_POINTS:
         raise r.error(
-            "duration_s",
-            f"{total:.3g} simulated samples in one run (truth and scans of {n_targets} "
-            f"target(s)); at most {MAX_POINTS}: shorten the scenario or lengthen the periods",
+            "multitarget" if born > n_scripted else "duration_s",
+            f"{total:.3g} simulated samples in one run (truth and scans of {n_targets:.3g} "
+            f"target(s)); at most {MAX_POINTS}: shorten the scenario or lengthen the periods"
+            + (", or ask for fewer targets, births or crossings" if born else ""),
         )
 
 

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import csv
 import errno
+import gzip
+import math
 import os
 import signal
 import stat
@@ -26,6 +28,7 @@ from test_hostile_ais import NMEA_TEXT
 from test_hostile_navigate import nav_inputs
 from test_hostile_simulate import SCENARIO
 from test_hostile_tma import BEARINGS
+from test_hostile_tma import bearings_text
 from test_hostile_track import PLOTS
 
 from seatrack.io.ais.nmea import nmea_checksum
@@ -91,9 +94,12 @@ PREVIOUS = b"previous output\n"
 
 
 def _unlabelled(d: Path) -> Path:
-    """PLOTS.csv without the track column: ``seatrack track`` runs the multi-target tracker."""
-    p = d / "plots.csv"
-    p.write_text("".join(ln.split(",", 1)[1] + "\n" for ln in PLOTS.splitlines()))
+    """PLOTS.csv without the track column, in time order: ``seatrack track`` runs the
+    multi-target tracker."""
+    p = d / "unlabelled.csv"
+    head, *body = [ln.split(",", 1)[1] for ln in PLOTS.splitlines()]
+    body.sort(key=lambda ln: float(ln.split(",")[0]))
+    p.write_text("".join(ln + "\n" for ln in [head, *body]))
     return p
 
 
@@ -274,3 +280,159 @@ def test_a_signal_ends_the_run_cleanly(tmp_path, sig):
     assert out.read_bytes() == PREVIOUS
     assert os.listdir(out_dir) == ["tracks.csv"]
     assert os.listdir(tmpdir) == []
+
+
+# ---------------------------------------------------------------------------
+# section 4: bad input accepted or reported without its file
+# ---------------------------------------------------------------------------
+def _plots_with(d: Path, column: str, value: str, row: int = 5, labelled: bool = True) -> Path:
+    lines = PLOTS.splitlines()
+    header = lines[0].split(",")
+    cells = lines[row].split(",")
+    cells[header.index(column)] = value
+    lines[row] = ",".join(cells)
+    if not labelled:
+        lines = [ln.split(",", 1)[1] for ln in lines]
+        lines[1:] = sorted(lines[1:], key=lambda ln: float(ln.split(",")[0]))
+    p = d / ("plots.csv" if labelled else "unlabelled.csv")
+    p.write_text("\n".join(lines) + "\n")
+    return p
+
+
+@pytest.mark.parametrize("labelled", [True, False])
+@pytest.mark.parametrize(
+    ("column", "value", "words"),
+    [
+        ("range_m", "1e300", "range_m = 1e+300 is implausible"),
+        ("range_m", "1e-320", "range_m = 9.99989e-321 is implausible"),
+        ("time_s", "1e300", "time_s = 1e+300"),
+    ],
+)
+def test_plot_values_beyond_the_limits_are_refused_with_file_and_line(
+    tmp_path, labelled, column, value, words
+):
+    p = _plots_with(tmp_path, column, value, labelled=labelled)
+    out = tmp_path / "t.csv"
+    before = _previous(out)
+    r = run_cli("track", p, "--out", out)
+    assert_clean(r, before, ["track", p, "--out", out])
+    assert r.code == 2 and r.err.startswith(f"error: {p}, line ") and words in r.err, r.err
+
+
+def test_a_1e9_s_gap_in_unlabelled_plots_is_refused(tmp_path):
+    lines = [ln.split(",", 1)[1] for ln in PLOTS.splitlines()]
+    body = sorted(lines[1:], key=lambda ln: float(ln.split(",")[0]))
+    last = body[-1].split(",")
+    last[0] = str(float(last[0]) + 1e9)
+    p = tmp_path / "unlabelled.csv"
+    p.write_text("\n".join([lines[0], *body, ",".join(last)]) + "\n")
+    r = run_cli("track", p, "--out", tmp_path / "t.csv")
+    assert r.code == 2 and f"line {len(body) + 2}: time gap" in r.err, r.err
+
+
+def test_a_duplicated_column_name_is_refused(tmp_path):
+    lines = PLOTS.splitlines()
+    for labelled in (True, False):
+        rows = [ln + ",5" for ln in lines]
+        rows[0] = lines[0] + ",range_m"
+        if not labelled:
+            rows = [ln.split(",", 1)[1] for ln in rows]
+        p = tmp_path / f"dup{labelled}.csv"
+        p.write_text("\n".join(rows) + "\n")
+        r = run_cli("track", p, "--out", tmp_path / "t.csv")
+        assert r.code == 2, r.err
+        assert r.err == f"error: {p}, line 1: column range_m appears more than once in the header\n"
+
+
+def test_a_csv_that_is_really_gzip_is_read_as_gzip(tmp_path):
+    plain, packed = tmp_path / "plain.csv", tmp_path / "packed.csv"
+    plain.write_text(PLOTS)
+    packed.write_bytes(gzip.compress(PLOTS.encode()))
+    r1 = run_cli("track", plain, "--out", tmp_path / "a.csv")
+    r2 = run_cli("track", packed, "--out", tmp_path / "b.csv")
+    assert r1.code == r2.code == 0, r2.err
+    assert (tmp_path / "a.csv").read_bytes() == (tmp_path / "b.csv").read_bytes()
+
+
+@pytest.mark.parametrize("kind", ["truncated", "corrupt"])
+def test_a_bad_compressed_input_is_named_not_the_output(tmp_path, kind):
+    data = gzip.compress(CSV_TEXT.encode() * 50)
+    if kind == "truncated":
+        data = data[: len(data) // 2]
+    else:
+        data = data[:40] + bytes(200) + data[240:]
+    src = tmp_path / "ais.csv.gz"
+    src.write_bytes(data)
+    out = tmp_path / "tracks.csv"
+    before = _previous(out)
+    args = ["ais", src, "--out", out]
+    r = run_cli(*args)
+    assert_clean(r, before, args)
+    assert r.code == 2 and r.err.startswith(f"error: {src}: not valid gzip data"), r.err
+
+
+@pytest.mark.parametrize("value", ["1e-300", "4e-320"])
+def test_a_tiny_bearing_sigma_is_refused_by_name(tmp_path, value):
+    b = tmp_path / "b.csv"
+    b.write_text(BEARINGS)
+    r = run_cli("tma", b, "--sigma-deg", value)
+    assert r.code == 2 and r.err.startswith("error: --sigma-deg must be a number of degrees in")
+    lines = BEARINGS.splitlines()
+    cells = lines[3].split(",")
+    cells[-1] = value
+    lines[3] = ",".join(cells)
+    b.write_text("\n".join(lines) + "\n")
+    r = run_cli("tma", b)
+    assert r.code == 2 and r.err.startswith(f"error: {b}, line 4: sigma_deg = "), r.err
+
+
+@pytest.mark.parametrize("text", ["", ",,,", " , "])
+def test_manoeuvres_without_a_time_are_refused(tmp_path, text):
+    b = tmp_path / "b.csv"
+    b.write_text(BEARINGS)
+    r = run_cli("tma", b, "--manoeuvres", text)
+    assert r.code == 2 and r.err.startswith("error: --manoeuvres: no time in"), r.err
+
+
+# ---------------------------------------------------------------------------
+# section 5: plausible but suspicious units are warned about, by column
+# ---------------------------------------------------------------------------
+def _convert(text: str, column: str, f) -> str:
+    lines = text.splitlines()
+    j = lines[0].split(",").index(column)
+    out = [lines[0]]
+    for ln in lines[1:]:
+        cells = ln.split(",")
+        cells[j] = repr(f(float(cells[j])))
+        out.append(",".join(cells))
+    return "\n".join(out) + "\n"
+
+
+@pytest.mark.parametrize("labelled", [True, False])
+@pytest.mark.parametrize(
+    ("column", "f", "words"),
+    [
+        ("azimuth_deg", math.radians, "azimuth_deg is between"),
+        ("range_m", lambda r: r / 1000, "range_m is below 100: it looks like kilometres"),
+        ("time_s", lambda t: t * 1000, "time_s values are a median 2000 s apart"),
+    ],
+)
+def test_suspicious_plot_units_are_warned_about(tmp_path, labelled, column, f, words):
+    text = PLOTS if labelled else _unlabelled(tmp_path).read_text()
+    p = tmp_path / "plots.csv"
+    p.write_text(_convert(text, column, f))
+    r = run_cli("track", p, "--out", tmp_path / "t.csv")
+    assert r.code == 0, r.err
+    lines = r.err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith(f"warning: {p}: ") and words in lines[0]
+    p.write_text(text)
+    r = run_cli("track", p, "--out", tmp_path / "t.csv")
+    assert r.code == 0 and r.err == ""
+
+
+def test_tma_times_in_milliseconds_are_warned_about(tmp_path):
+    b = tmp_path / "b.csv"
+    b.write_text(_convert(bearings_text(1), "time_s", lambda t: t * 1000))  # 60 s -> 60000
+    r = run_cli("tma", b, "--no-detect")
+    assert r.code == 0, r.err
+    assert r.err.startswith(f"warning: {b}: consecutive time_s values are a median ")

@@ -120,7 +120,7 @@ def test_console_error_is_one_line_with_exit_status_2(tmp_path):
 @pytest.mark.parametrize(
     "option, value, message",
     [
-        ("--sigma-deg", "nan", "--sigma-deg must be a number of degrees in (0, 180)"),
+        ("--sigma-deg", "nan", "--sigma-deg must be a number of degrees in [1e-06, 180)"),
         ("--sigma-deg", "0", "--sigma-deg must be"),
         ("--sigma-deg", "200", "--sigma-deg must be"),
         ("--manoeuvres", "inf", "--manoeuvres: 'inf' is not a finite time"),

@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING
 
 import typer
 
+from seatrack.io.table import MIN_SIGMA
 from seatrack.io.table import InputError
 
 if TYPE_CHECKING:
@@ -38,6 +39,10 @@ def _parse_times(text: str | None) -> list[float] | None:
         if not math.isfinite(v):
             raise InputError(f"--manoeuvres: {part!r} is not a finite time")
         out.append(v)
+    if not out:
+        raise InputError(
+            f"--manoeuvres: no time in {text!r}; give T1,T2,... (s) or leave the option out"
+        )
     if any(b <= a for a, b in zip(out, out[1:], strict=False)):
         raise InputError(f"--manoeuvres: times must be strictly increasing, got {text}")
     return out
@@ -103,9 +108,9 @@ def register(app: typer.Typer) -> None:
         from seatrack.tma import TMAConfig
         from seatrack.tma import solve_many
 
-        if not (math.isfinite(sigma_deg) and 0 < sigma_deg < 180):
+        if not (math.isfinite(sigma_deg) and MIN_SIGMA <= sigma_deg < 180):
             raise InputError(
-                f"--sigma-deg must be a number of degrees in (0, 180), got {sigma_deg}"
+                f"--sigma-deg must be a number of degrees in [{MIN_SIGMA:g}, 180), got {sigma_deg}"
             )
         outputs = {"--out": out, "--plot": plot}
         prepare_outputs(outputs, inputs=[bearings, support], images=["--plot"])

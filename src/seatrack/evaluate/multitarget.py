@@ -424,11 +424,10 @@ def require_multitarget(scenario: Any, sensor: Any, methods: Sequence[str], runs
     (:mod:`seatrack.io.budget`): runs x expected targets x scans x trackers (each method
     with GNN and JPDA)."""
     from seatrack.io.budget import require
-    from seatrack.simulate.scenarios import expected_targets
 
     scans = int(np.floor(scenario.duration / sensor.scan_period + 1e-9)) + 1
-    targets = len(scenario.targets) + expected_targets(
-        scenario.multitarget, scenario.duration, sensor.scan_period
+    targets = len(scenario.targets) + scenario.multitarget.expected_targets(
+        scenario.duration, sensor.scan_period
     )
     steps = float(runs) * max(targets, 1.0) * scans
     trackers = 2 * len(methods)

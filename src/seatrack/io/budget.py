@@ -27,7 +27,7 @@ import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
 
-from seatrack.io.table import InputError
+from seatrack.io.errors import InputError
 
 __all__ = [
     "Budget",

@@ -22,7 +22,7 @@ from typing import Any
 
 from seatrack.io.budget import current
 from seatrack.io.budget import format_bytes
-from seatrack.io.table import InputError
+from seatrack.io.errors import InputError
 
 __all__ = ["MAX_RATIO", "RATIO_FREE_BYTES", "compression_of", "open_input", "read_input"]
 

@@ -62,6 +62,10 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.io.budget import require
+from seatrack.io.compressed import read_input
+from seatrack.io.errors import InputError
+
 __all__ = [
     "InputError",
     "Rejected",
@@ -84,16 +88,17 @@ __all__ = [
     "longitude",
     "MAX_TIME_S",
     "MAX_DISTANCE_M",
+    "MIN_SIGMA",
 ]
 
 #: largest accepted |time| in seconds: Unix time of 2100-01-01T00:00:00Z
 MAX_TIME_S = 4_102_444_800.0
 #: largest accepted distance or |coordinate| in metres (about 15 Earth radii)
 MAX_DISTANCE_M = 1e8
-
-
-class InputError(ValueError):
-    """A user-supplied file or value is malformed. The message names the file, row and problem."""
+#: smallest accepted noise sigma, in the unit of the file or option (deg, m, m/s): below
+#: it the covariance and its inverse leave the floating-point range (no sensor is that
+#: precise)
+MIN_SIGMA = 1e-6
 
 
 @dataclass(frozen=True)
@@ -312,9 +317,6 @@ def read_input_bytes(p: Path, kind: str = "a CSV file") -> bytes:
         As :func:`check_input_file`; a file too large for the memory budget, a compression
         bomb or corrupt compressed data (:mod:`seatrack.io.compressed`), naming the file.
     """
-    from seatrack.io.budget import require
-    from seatrack.io.compressed import read_input
-
     check_input_file(p, kind)
     try:
         size = p.stat().st_size

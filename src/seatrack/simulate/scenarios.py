@@ -75,6 +75,7 @@ from numpy.typing import NDArray
 from seatrack.geometry import KNOT_MPS
 from seatrack.geometry import geodetic_to_enu
 from seatrack.io.table import MAX_TIME_S
+from seatrack.io.table import MIN_SIGMA
 from seatrack.io.table import InputError
 from seatrack.simulate.multitarget import TargetPopulation
 from seatrack.simulate.multitarget import parse_multitarget
@@ -92,7 +93,6 @@ from seatrack.simulate.trajectories import trajectory
 FloatArray = NDArray[np.float64]
 
 __all__ = [
-    "expected_targets",
     "SENSOR_TYPES",
     "Platform",
     "SensorConfig",
@@ -124,9 +124,6 @@ _SIGMA_KEYS = {
     "elevation": ("elevation_deg", math.pi / 180.0),
     "range_rate": ("range_rate_mps", 1.0),
 }
-#: smallest sensor noise sigma, in the file's unit (deg, m, m/s): below it the noise
-#: covariance and its inverse leave the floating-point range (no sensor is that precise)
-MIN_SIGMA = 1e-6
 #: most samples on one time grid (truth, or one sensor's scans) in a simulated run
 MAX_SAMPLES = 1_000_000
 #: most samples of all platforms on all grids in a simulated run (bounds memory: ~1 GB)
@@ -666,28 +663,14 @@ def parse_scenario(doc: Mapping[str, Any], path: str = "<scenario>") -> Scenario
     )
 
 
-def expected_targets(population: TargetPopulation | None, duration: float, scan_s: float) -> float:
-    """Targets a ``[multitarget]`` population is expected to hold over a run: those at the
-    start, the crossing pairs and the births at ``births_per_scan`` per scan of ``scan_s``."""
-    if population is None:
-        return 0.0
-    n_scans = math.floor(duration / scan_s + 1e-9) + 1
-    p = population
-    return p.targets + 2 * p.crossings + p.births_per_scan * n_scans
-
-
 def _check_work(
-    r: TomlReader,
-    duration: float,
-    dt: float,
-    n_scripted: int,
-    sensors: Sequence[SensorConfig],
+    r: TomlReader, duration: float, dt: float, n_scripted: int, sensors: Sequence[SensorConfig],
     population: TargetPopulation | None = None,
-) -> None:
+) -> None:  # fmt: skip
     """Bound the memory and time one simulated run takes, before anything is allocated
     (the scripted targets and the expected ones of a ``[multitarget]`` population)."""
     fastest = min((s.scan_period for s in sensors), default=dt)
-    born = expected_targets(population, duration, fastest)
+    born = population.expected_targets(duration, fastest) if population else 0.0
     n_targets = n_scripted + born
     total = 0.0
     for i, s in enumerate(sensors):

@@ -1,0 +1,100 @@
+"""Warnings for plausible but suspicious inputs: a column that looks like it is in the
+wrong unit.
+
+Each check returns the warning text (``FILE: column ... looks like ...``) or ``None``; the
+readers print them with :func:`warn` as one ``warning: ...`` line on standard error after
+the file was read, and go on: the values are legal, only unlikely. The heuristics are
+deliberately narrow (at least :data:`MIN_ROWS` values, all of them in the suspicious range)
+so that they stay silent on the bundled scenarios and examples:
+
+* azimuths or bearings in radians: every value of a ``*_deg`` angle column in
+  ``[0, 2 pi]``;
+* ranges in kilometres: every ``range_m`` below :data:`KM_RANGE_BELOW_M`;
+* times in milliseconds: consecutive rows of one track or contact a median of more than
+  :data:`MS_STEP_ABOVE_S` seconds apart (a radar scans every few seconds, a sonar bearing
+  comes every minute at most).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from collections.abc import Iterable
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = [
+    "MIN_ROWS",
+    "KM_RANGE_BELOW_M",
+    "MS_STEP_ABOVE_S",
+    "warn",
+    "radians_warning",
+    "km_warning",
+    "ms_warning",
+]
+
+#: fewest values a heuristic looks at
+MIN_ROWS = 10
+#: every range below this (m) looks like kilometres
+KM_RANGE_BELOW_M = 100.0
+#: a median time step above this (s) between rows of one track looks like milliseconds
+MS_STEP_ABOVE_S = 600.0
+
+
+def warn(messages: Iterable[str | None]) -> None:
+    """Print each message (``None`` skipped) as one ``warning: ...`` line on stderr."""
+    for m in messages:
+        if m:
+            print(f"warning: {m}", file=sys.stderr)
+
+
+def radians_warning(path: str, column: str, deg: NDArray[np.float64]) -> str | None:
+    """Every value of angle column ``column`` (degrees) in ``[0, 2 pi]``: radians?"""
+    a = np.asarray(deg, float)
+    a = a[np.isfinite(a)]
+    if a.size < MIN_ROWS or a.min() < 0 or a.max() > 2 * math.pi or a.max() == a.min():
+        return None
+    return (
+        f"{path}: every {column} is between {a.min():.3g} and {a.max():.3g}: it looks like "
+        "radians (the column is in degrees)"
+    )
+
+
+def km_warning(path: str, column: str, metres: NDArray[np.float64]) -> str | None:
+    """Every value of range column ``column`` below :data:`KM_RANGE_BELOW_M`: kilometres?"""
+    r = np.asarray(metres, float)
+    r = r[np.isfinite(r)]
+    if r.size < MIN_ROWS or r.max() >= KM_RANGE_BELOW_M:
+        return None
+    return (
+        f"{path}: every {column} is below {KM_RANGE_BELOW_M:g}: it looks like kilometres "
+        "(the column is in metres)"
+    )
+
+
+def ms_warning(
+    path: str, column: str, t: NDArray[np.float64], groups: NDArray[np.generic] | None = None
+) -> str | None:
+    """Rows of one group (track, contact; all rows when ``None``) a median of more than
+    :data:`MS_STEP_ABOVE_S` apart in ``column`` (s): milliseconds?"""
+    t = np.asarray(t, float)
+    if t.size < MIN_ROWS:
+        return None
+    if groups is None:
+        steps = np.diff(np.unique(t))
+    else:
+        g = np.asarray(groups)
+        order = np.lexsort((t, g))
+        same = g[order][1:] == g[order][:-1]
+        steps = np.diff(t[order])[same]
+    steps = steps[steps > 0]
+    if steps.size < MIN_ROWS - 1:
+        return None
+    med = float(np.median(steps))
+    if med <= MS_STEP_ABOVE_S:
+        return None
+    return (
+        f"{path}: consecutive {column} values are a median {med:g} s apart: it looks like "
+        "milliseconds (the column is in seconds)"
+    )

@@ -21,8 +21,12 @@ from pathlib import Path
 
 import pytest
 from hostile_inputs import assert_clean
+from hostile_inputs import hostile_output
 from hostile_inputs import run_cli
 from hostile_inputs import snapshot
+from hypothesis import given
+from hypothesis import settings
+from hypothesis import strategies as st
 from test_hostile_ais import CSV_TEXT
 from test_hostile_ais import NMEA_TEXT
 from test_hostile_navigate import nav_inputs
@@ -436,3 +440,37 @@ def test_tma_times_in_milliseconds_are_warned_about(tmp_path):
     r = run_cli("tma", b, "--no-detect")
     assert r.code == 0, r.err
     assert r.err.startswith(f"warning: {b}: consecutive time_s values are a median ")
+
+
+# ---------------------------------------------------------------------------
+# property tests: hostile output paths for every command with an --out file
+# ---------------------------------------------------------------------------
+#: kinds that must be refused before any work
+REFUSED = {"input", "hard_link", "folder", "under_file", "fifo", "device", "long_name"}
+
+
+@settings(max_examples=40, deadline=None)
+@given(data=st.data(), cmd=st.sampled_from(["track", "tma", "ais"]))
+def test_hostile_output_paths(tmp_path_factory, data, cmd):
+    d = tmp_path_factory.mktemp("outpath")
+    text = {"track": PLOTS, "tma": BEARINGS, "ais": NMEA_TEXT}[cmd]
+    inp = d / "input.csv"
+    inp.write_text(text)
+    kind, out = data.draw(hostile_output(d, [inp]))
+    extra = ["--no-detect"] if cmd == "tma" else []
+    args: list[object] = [cmd, inp, "--out", out, *extra]
+    watched = [inp] + ([out] if out.is_file() and out.parent != Path("/dev") else [])
+    before = snapshot(watched)
+    r = run_cli(*args)
+    assert_clean(r, before, args)
+    assert inp.read_text() == text, f"{kind}: the input was changed"
+    if kind in REFUSED:
+        assert r.code == 2 and "--out" in r.err, (kind, r.err)
+    if kind == "symlink":
+        assert out.is_symlink()
+    assert stat.S_ISCHR(os.stat("/dev/null").st_mode)
+
+
+def test_evaluate_skip_is_checked_for_multitarget_scenarios():
+    r = run_cli("evaluate", "coastal_multitarget", "--runs", "1", "--skip", "100000")
+    assert r.code == 2 and r.err.startswith("error: --skip = 100000 must be in [0, 80]"), r.err

@@ -102,16 +102,6 @@ def register(app: typer.Typer) -> None:
         source = resolve_scenario(scenario)
         prepare_outputs({"--csv": csv_out}, {"--plots": plots}, inputs=[source])
         sc = load_scenario(source)
-        option_in("--runs", sc.runs if runs is None else runs, 1, MAX_RUNS)
-        option_in("--processes", processes, 1, MAX_PROCESSES)
-        if sc.multitarget is not None:  # unlabelled plots: the multi-target tracker
-            from seatrack.evaluate.multitarget import evaluate_multitarget
-
-            mt = None if methods is None else [m.strip() for m in methods.split(",") if m.strip()]
-            n_mt, s_mt = sc.runs if runs is None else runs, sc.seed if seed is None else seed
-            typer.echo(evaluate_multitarget(sc, n_mt, s_mt, mt, sensor, csv_out, plots))
-            return
-        names = _methods(methods)
         n = sc.runs if runs is None else runs
         s = sc.seed if seed is None else seed
         option_in("--runs", n, 1, MAX_RUNS)
@@ -122,6 +112,13 @@ def register(app: typer.Typer) -> None:
         except ValueError as exc:
             raise InputError(f"{'--sensor' if sensor is not None else sc.path}: {exc}") from None
         check_skip(skip, sens.scan_times(sc.duration).size, sens.name)
+        if sc.multitarget is not None:  # unlabelled plots: the multi-target tracker
+            from seatrack.evaluate.multitarget import evaluate_multitarget
+
+            mt = None if methods is None else [m.strip() for m in methods.split(",") if m.strip()]
+            typer.echo(evaluate_multitarget(sc, n, s, mt, sensor, csv_out, plots))
+            return
+        names = _methods(methods)
         require_evaluation(sc, sens, names, n, processes)
         pngs = [plots / "pos_rmse.png", plots / "anees.png"] if plots is not None else []
         prepare_outputs([csv_out, *pngs], [plots])

@@ -66,3 +66,24 @@ def test_silent_on_the_bundled_scenarios(tmp_path, name, capsys):
 def test_silent_on_the_examples(capsys):
     read_bearings(EXAMPLES / "tma_bearings.csv", default_sigma=math.radians(1.0))
     assert capsys.readouterr().err == ""
+
+
+def test_gyro_in_rad_per_s(tmp_path, capsys):
+    from seatrack.io.navigation import read_gyro
+    from seatrack.io.navigation import write_gyro
+    from seatrack.simulate.radar_echoes import channel_landmarks
+    from seatrack.simulate.radar_echoes import river_route
+    from seatrack.simulate.radar_echoes import simulate_radar
+
+    route = river_route(2000.0, 4.0)
+    lm = channel_landmarks(route, 8, np.random.default_rng(1))
+    sim = simulate_radar(route, lm, np.random.default_rng(2))
+    deg = tmp_path / "gyro.csv"
+    write_gyro(deg, sim.gyro_t, sim.gyro_rate)  # written in deg/s
+    read_gyro(deg)
+    assert capsys.readouterr().err == ""
+    rad = tmp_path / "gyro_rad.csv"
+    write_gyro(rad, sim.gyro_t, np.radians(sim.gyro_rate))  # the mistake: rad/s in the file
+    read_gyro(rad)
+    err = capsys.readouterr().err
+    assert err.startswith(f"warning: {rad}: every turn_rate_dps is below 0.05") and "rad/s" in err

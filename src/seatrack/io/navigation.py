@@ -18,6 +18,8 @@ from numpy.typing import NDArray
 
 from seatrack.geometry import bearing_rad_to_deg
 from seatrack.io.atomic import atomic_write
+from seatrack.io.suspect import rad_per_s_warning
+from seatrack.io.suspect import warn
 from seatrack.io.table import between
 from seatrack.io.table import check_times
 from seatrack.io.table import positive
@@ -101,6 +103,7 @@ def read_gyro(path: str | Path) -> tuple[FloatArray, FloatArray]:
         checks=(seconds("time_s"), between("turn_rate_dps", -lim, lim)),
     )
     check_times(t, "time_s", strict=True)
+    warn([rad_per_s_warning(t.path, "turn_rate_dps", t["turn_rate_dps"])])
     return t["time_s"], np.radians(t["turn_rate_dps"])
 
 

@@ -12,7 +12,10 @@ so that they stay silent on the bundled scenarios and examples:
 * ranges in kilometres: every ``range_m`` below :data:`KM_RANGE_BELOW_M`;
 * times in milliseconds: consecutive rows of one track or contact a median of more than
   :data:`MS_STEP_ABOVE_S` seconds apart (a radar scans every few seconds, a sonar bearing
-  comes every minute at most).
+  comes every minute at most);
+* a gyro in rad/s: at least :data:`MIN_GYRO_ROWS` turn rates, every one below
+  :data:`RAD_RATE_BELOW_DPS` in magnitude (a ship's gyro reads tenths of a degree per
+  second on any passage with a bend; 0.05 rad/s is 2.9 deg/s).
 """
 
 from __future__ import annotations
@@ -32,6 +35,9 @@ __all__ = [
     "radians_warning",
     "km_warning",
     "ms_warning",
+    "rad_per_s_warning",
+    "MIN_GYRO_ROWS",
+    "RAD_RATE_BELOW_DPS",
 ]
 
 #: fewest values a heuristic looks at
@@ -40,6 +46,10 @@ MIN_ROWS = 10
 KM_RANGE_BELOW_M = 100.0
 #: a median time step above this (s) between rows of one track looks like milliseconds
 MS_STEP_ABOVE_S = 600.0
+#: fewest gyro samples the rad/s heuristic looks at (10 s at 10 Hz)
+MIN_GYRO_ROWS = 100
+#: every |turn rate| below this (deg/s) looks like rad/s
+RAD_RATE_BELOW_DPS = 0.05
 
 
 def warn(messages: Iterable[str | None]) -> None:
@@ -97,4 +107,17 @@ def ms_warning(
     return (
         f"{path}: consecutive {column} values are a median {med:g} s apart: it looks like "
         "milliseconds (the column is in seconds)"
+    )
+
+
+def rad_per_s_warning(path: str, column: str, dps: NDArray[np.float64]) -> str | None:
+    """Every turn rate of ``column`` (deg/s) below :data:`RAD_RATE_BELOW_DPS` over at least
+    :data:`MIN_GYRO_ROWS` samples, not all zero: rad/s?"""
+    a = np.abs(np.asarray(dps, float))
+    a = a[np.isfinite(a)]
+    if a.size < MIN_GYRO_ROWS or a.max() >= RAD_RATE_BELOW_DPS or a.max() == 0:
+        return None
+    return (
+        f"{path}: every {column} is below {RAD_RATE_BELOW_DPS:g} in magnitude: it looks like "
+        "rad/s (the column is in deg/s)"
     )

@@ -474,3 +474,25 @@ def test_hostile_output_paths(tmp_path_factory, data, cmd):
 def test_evaluate_skip_is_checked_for_multitarget_scenarios():
     r = run_cli("evaluate", "coastal_multitarget", "--runs", "1", "--skip", "100000")
     assert r.code == 2 and r.err.startswith("error: --skip = 100000 must be in [0, 80]"), r.err
+
+
+SIZES = ["1.5G", "64M", "10", "", "lots", "-1G", "1e400", "nan", "4G", "100M", "1T"]
+DURATIONS = ["1h", "90s", "0", "-5", "", "soon", "1e-9", "30min", "2d"]
+
+
+@settings(max_examples=30, deadline=None)
+@given(memory=st.sampled_from(SIZES), time_limit=st.sampled_from(DURATIONS))
+def test_budget_options(tmp_path_factory, memory, time_limit):
+    """``seatrack --memory-limit M --time-limit T track ...``: a run or one line naming the
+    option (or the budget the run is over)."""
+    d = tmp_path_factory.mktemp("budget")
+    plots, out = d / "plots.csv", d / "t.csv"
+    plots.write_text(PLOTS)
+    before = _previous(out)
+    args = ["--memory-limit", memory, "--time-limit", time_limit, "track", plots, "--out", out]
+    r = run_cli(*args)
+    assert_clean(r, before, args)
+    if r.code == 2:
+        assert r.err.startswith(("error: --memory-limit: ", "error: --time-limit: ")) or (
+            "over the budget" in r.err
+        ), r.err

@@ -87,3 +87,45 @@ def test_gyro_in_rad_per_s(tmp_path, capsys):
     read_gyro(rad)
     err = capsys.readouterr().err
     assert err.startswith(f"warning: {rad}: every turn_rate_dps is below 0.05") and "rad/s" in err
+
+
+AIS_FILES = sorted((Path(__file__).resolve().parents[2] / "src/seatrack/data/ais").glob("*.csv"))
+
+
+def _ais_variant(src: Path, dst: Path, how: str) -> Path:
+    lines = src.read_text().splitlines()
+    head = lines[0].split(",")
+    names = {"lat": ("lat", "Latitude", "LAT"), "lon": ("lon", "Longitude", "LON"),
+             "sog": ("sog_kn", "SOG")}  # fmt: skip
+    col = {k: next(head.index(n) for n in v if n in head) for k, v in names.items()}
+    out = [lines[0]]
+    for ln in lines[1:]:
+        c = ln.split(",")
+        if how == "swap":
+            c[col["lat"]], c[col["lon"]] = c[col["lon"]], c[col["lat"]]
+        elif how == "mps" and c[col["sog"]].strip():
+            c[col["sog"]] = f"{float(c[col['sog']]) * 0.514444:.2f}"
+        out.append(",".join(c))
+    dst.write_text("\n".join(out) + "\n")
+    return dst
+
+
+@pytest.mark.parametrize("path", AIS_FILES, ids=lambda p: p.name)
+def test_ais_units_silent_on_the_bundled_logs_and_firing_on_the_mistakes(tmp_path, path):
+    from seatrack.io.ais import read_ais
+    from seatrack.io.suspect import AisUnitCheck
+
+    def check(p: Path) -> list[str]:
+        c = AisUnitCheck()
+        c.add(read_ais([p]))
+        return c.warnings(p.name)
+
+    assert check(path) == []
+    swapped = check(_ais_variant(path, tmp_path / "swap.csv", "swap"))
+    has_cog = np.isfinite(read_ais([path]).cog_deg).any()  # the North Sea logs have none
+    if has_cog:
+        assert len(swapped) == 1 and "lat and lon look swapped" in swapped[0]
+    else:
+        assert swapped == []  # undetectable without courses (the speeds do not tell)
+    mps = check(_ais_variant(path, tmp_path / "mps.csv", "mps"))
+    assert len(mps) == 1 and "sog_kn is a median 0.5" in mps[0] and "m/s" in mps[0]

@@ -79,13 +79,19 @@ def run(
     scheduler: str | None = None,
 ) -> list[str]:
     """Track ``inputs`` into ``out`` (and the map files); returns the summary lines."""
+    from seatrack.io.suspect import AisUnitCheck
+    from seatrack.io.suspect import warn
+
     want_map = geojson is not None or html is not None
     maps: list[Any] = []
+    units = AisUnitCheck()  # SOG in m/s, lat/lon swapped: warned about after the run
 
     def collect(r: Any, tr: Any) -> None:
         from seatrack.report.html import map_tracks
 
-        maps.extend(map_tracks(r, tr))
+        units.add(r)
+        if want_map:
+            maps.extend(map_tracks(r, tr))
 
     if use_dask:
         if want_map:
@@ -96,9 +102,8 @@ def run(
     else:
         from seatrack.io.ais.pipeline import track_files
 
-        summary = track_files(
-            inputs, out, cfg, memory_limit=memory_limit, on_group=collect if want_map else None
-        )
+        summary = track_files(inputs, out, cfg, memory_limit=memory_limit, on_group=collect)
+    warn(units.warnings(", ".join(map(str, inputs))))
     lines = summary.lines()
     # the map files through io.atomic whatever the report module does with a path
     from seatrack.io.atomic import atomic_path

@@ -13,6 +13,11 @@ so that they stay silent on the bundled scenarios and examples:
 * times in milliseconds: consecutive rows of one track or contact a median of more than
   :data:`MS_STEP_ABOVE_S` seconds apart (a radar scans every few seconds, a sonar bearing
   comes every minute at most);
+* AIS speeds in m/s, or latitude and longitude swapped (:class:`AisUnitCheck`): the
+  speed and course of each vessel between consecutive reports, from its positions, against
+  the reported SOG and COG: SOG a median 0.51 times the position speed is m/s; COG far from
+  the position course but close to the course of the positions read with latitude and
+  longitude exchanged is swapped columns;
 * a gyro in rad/s: at least :data:`MIN_GYRO_ROWS` turn rates, every one below
   :data:`RAD_RATE_BELOW_DPS` in magnitude (a ship's gyro reads tenths of a degree per
   second on any passage with a bend; 0.05 rad/s is 2.9 deg/s).
@@ -23,6 +28,7 @@ from __future__ import annotations
 import math
 import sys
 from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -36,6 +42,7 @@ __all__ = [
     "km_warning",
     "ms_warning",
     "rad_per_s_warning",
+    "AisUnitCheck",
     "MIN_GYRO_ROWS",
     "RAD_RATE_BELOW_DPS",
 ]
@@ -121,3 +128,80 @@ def rad_per_s_warning(path: str, column: str, dps: NDArray[np.float64]) -> str |
         f"{path}: every {column} is below {RAD_RATE_BELOW_DPS:g} in magnitude: it looks like "
         "rad/s (the column is in deg/s)"
     )
+
+
+#: Earth radius for the flat-Earth step between consecutive AIS reports, m
+_EARTH_M = 6_371_000.0
+
+
+class AisUnitCheck:
+    """Reported SOG and COG against the speed and course from consecutive positions of
+    each vessel, accumulated group by group (at most :attr:`most` pairs kept).
+
+    Only moving pairs count: same vessel, both rows usable, 5 to 120 s apart, more than
+    20 m apart and SOG above 2 kn; at least 100 of them (100 with a COG for the course
+    check).
+    """
+
+    most = 200_000
+
+    def __init__(self) -> None:
+        self.ratio: list[NDArray[np.float64]] = []
+        self.off: list[NDArray[np.float64]] = []
+        self.mirror: list[NDArray[np.float64]] = []
+        self.n = 0
+
+    def add(self, r: Any) -> None:
+        """Add the reports of one group (an :class:`~seatrack.io.ais.AisReports`)."""
+        from seatrack.geometry import angle_diff
+        from seatrack.geometry import bearing
+        from seatrack.geometry import mps_to_knots
+
+        if self.n >= self.most:
+            return
+        ok = np.asarray(r.code) == 0
+        mmsi = np.asarray(r.mmsi)[ok]
+        t = np.asarray(r.t, float)[ok]
+        lat = np.radians(np.asarray(r.lat, float)[ok])
+        lon = np.radians(np.asarray(r.lon, float)[ok])
+        sog = np.asarray(r.sog_kn, float)[ok]
+        cog = np.radians(np.asarray(r.cog_deg, float)[ok])
+        order = np.lexsort((t, mmsi))
+        mmsi, t, lat, lon, sog, cog = (a[order] for a in (mmsi, t, lat, lon, sog, cog))
+        dt = np.diff(t)
+        dx = _EARTH_M * np.cos(lat[1:]) * angle_diff(lon[1:], lon[:-1])
+        dy = _EARTH_M * (lat[1:] - lat[:-1])
+        dist = np.hypot(dx, dy)
+        use = (mmsi[1:] == mmsi[:-1]) & (dt >= 5) & (dt <= 120) & (dist > 20) & (sog[1:] > 2)
+        self.ratio.append(sog[1:][use] / mps_to_knots(dist[use] / dt[use]))
+        turn = use & np.isfinite(cog[1:])  # logs without COG: no course check
+        course = bearing(dx[turn], dy[turn])
+        # the course the positions give read the other way round (lat as lon, lon as lat)
+        dx_alt = _EARTH_M * np.cos(lon[1:]) * angle_diff(lat[1:], lat[:-1])
+        dy_alt = _EARTH_M * angle_diff(lon[1:], lon[:-1])
+        alt = bearing(dx_alt[turn], dy_alt[turn])
+        self.off.append(np.abs(angle_diff(cog[1:][turn], course)))
+        self.mirror.append(np.abs(angle_diff(cog[1:][turn], alt)))
+        self.n += int(use.sum())
+
+    def warnings(self, where: str) -> list[str]:
+        """The warnings for inputs ``where`` (none under :data:`MIN_ROWS` * 10 pairs)."""
+        if self.n < 10 * MIN_ROWS:
+            return []
+        off_all, mirror_all = np.concatenate(self.off), np.concatenate(self.mirror)
+        enough = off_all.size >= 10 * MIN_ROWS
+        off = float(np.degrees(np.median(off_all))) if enough else 0.0
+        mirror = float(np.degrees(np.median(mirror_all))) if enough else 180.0
+        if off > 45 and mirror < 20:  # (the speeds between swapped positions mean nothing)
+            return [
+                f"{where}: the reported courses match the positions with latitude and "
+                f"longitude swapped (median {mirror:.0f} deg off, {off:.0f} deg as given): "
+                "lat and lon look swapped"
+            ]
+        ratio = float(np.median(np.concatenate(self.ratio)))
+        if 0.45 < ratio < 0.58:
+            return [
+                f"{where}: sog_kn is a median {ratio:.2f} times the speed between the "
+                "positions: it looks like m/s (the column is in knots)"
+            ]
+        return []

@@ -103,7 +103,6 @@ def run(
         from seatrack.io.ais.pipeline import track_files
 
         summary = track_files(inputs, out, cfg, memory_limit=memory_limit, on_group=collect)
-    warn(units.warnings(", ".join(map(str, inputs))))
     lines = summary.lines()
     # the map files through io.atomic whatever the report module does with a path
     from seatrack.io.atomic import atomic_path
@@ -124,6 +123,7 @@ def run(
                 summary="; ".join(lines),
                 tile_url=tile_url,
             )
+    warn(units.warnings(", ".join(map(str, inputs))))  # after every output: a run, no error
     lines.append(f"wrote {out} ({summary.rows} rows)")
     lines += [f"wrote {p}" for p in (geojson, html) if p is not None]
     return lines

@@ -40,6 +40,7 @@ import typer
 
 from seatrack.io.atomic import OutputError
 from seatrack.io.atomic import output_transaction
+from seatrack.io.budget import budget
 from seatrack.io.table import InputError
 
 #: sub-command modules, in the order ``--help`` lists them
@@ -139,7 +140,7 @@ def _terminate_as_interrupt() -> Iterator[None]:
 
 def _run(argv: list[str] | None) -> int:
     try:
-        with output_transaction():
+        with budget(), output_transaction():  # the run's budget ends with it
             code = app(args=argv, standalone_mode=False)
             if code == INTERRUPTED:  # typer returns an interrupt as this status
                 raise KeyboardInterrupt

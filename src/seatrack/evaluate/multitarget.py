@@ -410,12 +410,13 @@ def gospa_series(scores: RunScores) -> dict[str, FloatArray]:
     }
 
 
-#: peak bytes per run, target and scan of a multi-target evaluation: the simulated plots
-#: and truth kept for every run, and per method and association the tracker's output
+#: peak bytes per run, target and scan of a multi-target evaluation, estimates (not
+#: measured): the simulated plots and truth kept for every run, and per method and
+#: association the tracker's output
 MT_BYTES_PER_STEP = 200
 MT_BYTES_PER_STEP_AND_TRACKER = 300
-#: seconds per run, target, scan and tracker (a plot through gating, association and a
-#: filter update)
+#: seconds per run, target, scan and tracker, an estimate (a plot through gating,
+#: association and a filter update)
 MT_SECONDS_PER_STEP = 2e-4
 
 

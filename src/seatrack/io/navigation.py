@@ -137,11 +137,11 @@ def write_nav(path: str | Path, res: NavResult) -> None:
         np.savetxt(fh, data, fmt=fmt, delimiter=",", header=",".join(NAV_COLUMNS), comments="")
 
 
-#: peak bytes per predictor tick of a navigation run: the state, its sigmas and time
-#: (104 bytes) in the loop, the result and the NAV.csv text being written
+#: peak bytes per predictor tick of a navigation run, an estimate: the state, its sigmas
+#: and time (104 bytes) in the loop and the result, and the NAV.csv text being written
 NAV_BYTES_PER_TICK = 500
-#: seconds per predictor tick of the navigation loop (about 94 us measured on a 2-core
-#: machine over a 1.5e6 s log)
+#: seconds per predictor tick of the navigation loop, an estimate (a log of 9.6e6 cycles
+#: takes about 15 min on a 2-core machine: 94 us)
 NAV_SECONDS_PER_TICK = 1e-4
 
 

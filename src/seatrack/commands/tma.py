@@ -17,7 +17,6 @@ from pathlib import Path
 import typer
 
 from seatrack.errors import InputError
-from seatrack.io.table import MIN_SIGMA
 
 
 def _parse_times(text: str | None) -> list[float] | None:
@@ -109,6 +108,7 @@ def register(app: typer.Typer) -> None:
         from seatrack.commands.options import prepare_outputs
         from seatrack.io.atomic import atomic_write
         from seatrack.io.rep import is_rep
+        from seatrack.io.table import MIN_SIGMA
         from seatrack.io.tma import parse_tonal_values
         from seatrack.io.tma import solution_summary
 

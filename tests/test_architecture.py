@@ -7,7 +7,7 @@ Layers point one way (a module imports only from its own layer or lower ones)::
     2  tracking                                    (multi-target tracking)
     3  io                                          (file formats: readers and writers)
     4  simulate, evaluate                          (scenarios, statistics; they use io)
-    5  report, live                                (live: the streaming process)
+    5  report, live, fusion                        (live: the streaming process)
     6  api                                         (the public Python API)
     7  commands, cli
     8  the ``seatrack`` package itself (its public names come from the api)
@@ -56,6 +56,7 @@ LAYERS: dict[str, int] = {
     "evaluate": 4,
     "report": 5,
     "live": 5,
+    "fusion": 5,
     "api": 6,
     "commands": 7,
     "cli": 7,

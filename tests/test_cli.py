@@ -35,12 +35,13 @@ COMMANDS = [
     "ais",
     "live",
     "replay",
+    "fuse",
 ]
 
 
 def test_every_command_module_is_registered():
     names = {c.name for c in typer.main.get_command(app).commands.values()}  # type: ignore[attr-defined]
-    assert set(COMMANDS) <= names and len(COMMAND_MODULES) == 9
+    assert set(COMMANDS) <= names and len(COMMAND_MODULES) == 10
 
 
 @pytest.mark.parametrize("args", [["-h"], ["--help"], *([c, "-h"] for c in COMMANDS)])

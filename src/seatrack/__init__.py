@@ -13,7 +13,11 @@ inputs and the same output columns):
   for plots without track labels (:class:`Sensor` for the measurement noise);
 * :func:`ais` -- clean and smooth AIS tracks;
 * :func:`navigate` -- own-ship position from radar echoes of mapped landmarks;
-* :func:`simulate`, :func:`evaluate` -- scenarios and Monte-Carlo comparisons.
+* :func:`simulate`, :func:`evaluate` -- scenarios and Monte-Carlo comparisons;
+* :func:`fuse` -- one picture from radar plots and AIS: identities, dark vessels, AIS
+  positions the radar does not see, shared MMSIs;
+* :class:`Tracker` and its roles (:class:`Associator`, :class:`Initiator`,
+  :class:`TrackManager`) -- the multi-target tracker, built from swappable parts.
 
 Inputs are paths, pandas DataFrames, pyarrow Tables or dicts of arrays with the CSV column
 names; outputs are pandas DataFrames with the CSV columns. The names are loaded on first
@@ -39,6 +43,7 @@ _LAZY: dict[str, str] = {
     "navigate": "seatrack.api.navigate",
     "simulate": "seatrack.api.simulate",
     "evaluate": "seatrack.api.evaluate",
+    "fuse": "seatrack.api.fuse",
     "Sensor": "seatrack.api.sensor",
     "UserError": "seatrack.errors",
     "Tracker": "seatrack.tracking.roles",
@@ -61,6 +66,7 @@ __all__ = [
     "navigate",
     "simulate",
     "evaluate",
+    "fuse",
     "Sensor",
     "UserError",
     "Tracker",
@@ -79,6 +85,7 @@ if TYPE_CHECKING:
 
     from seatrack.api.ais import ais
     from seatrack.api.evaluate import evaluate
+    from seatrack.api.fuse import fuse
     from seatrack.api.navigate import navigate
     from seatrack.api.sensor import Sensor
     from seatrack.api.simulate import simulate

@@ -12,11 +12,17 @@ the commands, keeping ``seatrack --help`` fast.
   (:class:`seatrack.io.atomic.OutputError`); any other ``OSError`` (a missing or unreadable
   file); a bad command line (click's usage errors) -- print one ``error: ...`` line on
   standard error, exit 2;
-* an interrupt prints ``error: interrupted``, exit 130;
+* an interrupt -- SIGINT (Ctrl-C) or SIGTERM -- prints ``error: interrupted``, exit 130;
 * anything else is a bug, a ``ValueError`` that is not a ``UserError`` included: one
   ``internal error: ...`` line asking for a report, exit 1 (``SEATRACK_TRACEBACK=1``
   re-raises it with its traceback). Tests that drive commands
   through :func:`main` see exit status 1, never a user-error 2, so bugs are not hidden.
+
+Every command runs inside one :func:`seatrack.io.atomic.output_transaction`: its outputs
+replace the previous files together when it succeeds, and none does when it fails or is
+interrupted (their temporaries, and the command's temporary folders, are removed). Its
+work is bounded by the ``--memory-limit`` / ``--time-limit`` budget
+(:mod:`seatrack.io.budget`).
 
 Numerical ``RuntimeWarning``\ s are silenced in the CLI (results with NaN are reported
 as such by the commands); ``-h`` is accepted wherever ``--help`` is.
@@ -24,16 +30,22 @@ as such by the commands); ``-h`` is accepted wherever ``--help`` is.
 
 from __future__ import annotations
 
+import contextlib
 import importlib
 import os
+import signal
 import sys
+import threading
 import warnings
+from collections.abc import Iterator
 from typing import Any
 
 import typer
 
 from seatrack.errors import UserError
 from seatrack.io.atomic import OutputError
+from seatrack.io.atomic import output_transaction
+from seatrack.io.budget import budget
 
 #: sub-command modules, in the order ``--help`` lists them
 COMMAND_MODULES = [
@@ -46,6 +58,7 @@ COMMAND_MODULES = [
     "seatrack.commands.ais",
     "seatrack.commands.live",
     "seatrack.commands.replay",
+    "seatrack.commands.fuse",
 ]
 
 app = typer.Typer(
@@ -77,8 +90,22 @@ def _root(
         callback=_print_version,
         is_eager=True,
     ),
+    memory_limit: str = typer.Option(
+        "1.5G",
+        "--memory-limit",
+        help="memory budget of a run's data (e.g. 4G); a run estimated above it is refused "
+        "before it starts",
+    ),
+    time_limit: str = typer.Option(
+        "1h", "--time-limit", help="time budget of a run (e.g. 90s, 30min, 2h), as above"
+    ),
 ) -> None:
     """Maritime and radar target tracking and navigation."""
+    from seatrack.io.budget import parse_duration
+    from seatrack.io.budget import parse_size
+    from seatrack.io.budget import set_budget
+
+    set_budget(parse_size(memory_limit), parse_duration(time_limit))
 
 
 def register_commands(target: typer.Typer, modules: list[str]) -> None:
@@ -89,6 +116,9 @@ def register_commands(target: typer.Typer, modules: list[str]) -> None:
 
 register_commands(app, COMMAND_MODULES)
 
+
+#: exit status of an interrupted command (128 + SIGINT, as a shell reports Ctrl-C)
+INTERRUPTED = 130
 
 #: exceptions that are the user's to fix (printed as ``error: ...``, exit status 2)
 USER_ERRORS: tuple[type[BaseException], ...] = (UserError, OSError)
@@ -101,17 +131,39 @@ def _one_line(text: str) -> str:
 def main(argv: list[str] | None = None) -> None:
     """Entry point of the ``seatrack`` console script (always ends in ``sys.exit``)."""
     os.environ.setdefault("PYTHONWARNINGS", "ignore::RuntimeWarning")  # worker processes
-    with warnings.catch_warnings():
+    with warnings.catch_warnings(), _terminate_as_interrupt():
         warnings.simplefilter("ignore", RuntimeWarning)
         sys.exit(_run(argv))
 
 
+def _interrupt(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt(signal.Signals(signum).name)
+
+
+@contextlib.contextmanager
+def _terminate_as_interrupt() -> Iterator[None]:
+    """SIGTERM ends a command as Ctrl-C does: the exception unwinds every ``with`` block
+    (temporary files and folders removed, previous outputs kept). Only in the main thread
+    of the main interpreter (elsewhere signals cannot be handled)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.signal(signal.SIGTERM, _interrupt)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)
+
+
 def _run(argv: list[str] | None) -> int:
     try:
-        code = app(args=argv, standalone_mode=False)
+        with budget(), output_transaction():  # the run's budget ends with it
+            code = app(args=argv, standalone_mode=False)
+            if code == INTERRUPTED:  # typer returns an interrupt as this status
+                raise KeyboardInterrupt
     except (typer.Abort, KeyboardInterrupt):
         typer.echo("error: interrupted", err=True)
-        return 130
+        return INTERRUPTED
     except USER_ERRORS as exc:
         if isinstance(exc, BrokenPipeError):
             return 1

@@ -11,16 +11,21 @@ The mutations: cells replaced by NaN, inf, 1e308, -0, empty, garbage, Latin-1 te
 integers; rows and columns deleted, duplicated and swapped; extra or missing cells; blank
 lines; header-only and empty files; then, on the bytes, a BOM, CRLF or CR line ends,
 semicolons or tabs for commas, a cut at any byte, a Latin-1 byte, a NUL or random binary
-bytes inserted, or the whole file replaced by binary data.
+bytes inserted, or the whole file replaced by binary data; or the file compressed (gzip,
+zstd), cut inside its compressed data, or made a compression bomb. :func:`hostile_output`
+draws an output path that must be refused or handled (an input, a folder, a pipe, a device,
+a symbolic link, a name with no room for its temporary, another output of the run).
 """
 
 from __future__ import annotations
 
+import gzip
 import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
 
+import pyarrow as pa
 from hypothesis import strategies as st
 
 from cli_inprocess import seatrack
@@ -220,6 +225,10 @@ def _byte_op(draw: st.DrawFn, data: bytes) -> bytes:
                 "binary",
                 "all_binary",
                 "empty",
+                "gzip",
+                "zstd",
+                "gzip_cut",
+                "gzip_bomb",
             )
         )
     )
@@ -246,6 +255,18 @@ def _byte_op(draw: st.DrawFn, data: bytes) -> bytes:
         return draw(st.binary(max_size=300))
     if op == "empty":
         return b""
+    if op == "gzip":
+        return gzip.compress(data)
+    if op == "zstd":
+        sink = pa.BufferOutputStream()
+        with pa.CompressedOutputStream(sink, "zstd") as fh:
+            fh.write(data)
+        return bytes(sink.getvalue().to_pybytes())
+    if op == "gzip_cut":
+        packed = gzip.compress(data)
+        return packed[: draw(st.integers(0, len(packed)))]
+    if op == "gzip_bomb":  # the data, then 40 MB of NUL bytes: refused as a bomb, quickly
+        return gzip.compress(data + bytes(40 << 20), compresslevel=9)
     return data
 
 
@@ -288,3 +309,64 @@ def mutated_text(draw: st.DrawFn, text: str, max_ops: int = 3) -> bytes:
         else:
             lines[i] = lines[i][: _pick(draw, len(lines[i]) + 1)]
     return _byte_op(draw, "".join(ln + "\n" for ln in lines).encode("utf-8"))
+
+
+#: kinds of hostile output paths :func:`hostile_output` draws
+OUTPUT_KINDS = (
+    "fresh", "existing", "input", "hard_link", "folder", "under_file", "fifo", "device",
+    "symlink", "dangling_symlink", "long_name", "other_output", "no_suffix",
+)  # fmt: skip
+
+
+@st.composite
+def hostile_output(
+    draw: st.DrawFn, d: Path, inputs: list[Path], other: Path | None = None
+) -> tuple[str, Path]:
+    """A kind from :data:`OUTPUT_KINDS` and an output path of that kind, made in ``d``."""
+    kind = draw(st.sampled_from(OUTPUT_KINDS))
+    p = d / f"out-{kind}.csv"
+    if kind == "existing":
+        p.write_bytes(b"previous\n")
+    elif kind == "input":
+        p = draw(st.sampled_from(inputs))
+    elif kind == "hard_link":
+        if not p.exists():
+            os.link(draw(st.sampled_from(inputs)), p)
+    elif kind == "folder":
+        p.mkdir(exist_ok=True)
+    elif kind == "under_file":
+        (d / "a-file").write_bytes(b"x")
+        p = d / "a-file" / "out.csv"
+    elif kind == "fifo":
+        if not p.exists():
+            os.mkfifo(p)
+    elif kind == "device":
+        p = Path("/dev/null")
+    elif kind == "symlink":
+        target = d / "link-target.csv"
+        target.write_bytes(b"previous\n")
+        if not p.is_symlink():
+            p.symlink_to(target)
+    elif kind == "dangling_symlink":
+        if not p.is_symlink():
+            p.symlink_to(d / "nowhere" / "x.csv")
+    elif kind == "long_name":
+        p = d / ("x" * 250 + ".csv")
+    elif kind == "other_output" and other is not None:
+        p = other
+    elif kind == "no_suffix":
+        p = d / "out"
+    return kind, p
+
+
+def plain(data: bytes) -> bytes:
+    """``data`` as a reader sees it: decompressed when it is whole gzip or zstd data (a
+    reader recognises them by their first bytes), else unchanged."""
+    for magic, codec in ((b"\x1f\x8b", "gzip"), (b"\x28\xb5\x2f\xfd", "zstd")):
+        if data.startswith(magic):
+            try:
+                with pa.input_stream(pa.BufferReader(data), compression=codec) as fh:
+                    return bytes(fh.read())
+            except (OSError, ValueError):
+                return data
+    return data

@@ -159,7 +159,7 @@ def test_evaluate_table_and_reproducibility(tmp_path):
     assert res2.exit_code == 0, res2.output
     assert (tmp_path / "plots" / "pos_rmse.png").stat().st_size > 0
     assert (tmp_path / "plots" / "anees.png").stat().st_size > 0
-    assert "position CRB" in res.output  # linear_cv: constant-velocity target, Gaussian noise
+    assert "posterior CRB" in res.output  # linear_cv: constant-velocity target, Gaussian noise
     rows = _csv_rows(one)
     assert rows == _csv_rows(two)
     assert rows[0]["method"] == "ekf" and float(rows[0]["pos_rmse_m"]) > 0

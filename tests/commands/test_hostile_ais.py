@@ -17,6 +17,7 @@ import pytest
 from hostile_inputs import assert_clean
 from hostile_inputs import mutated_csv
 from hostile_inputs import mutated_text
+from hostile_inputs import plain
 from hostile_inputs import run_cli
 from hostile_inputs import snapshot
 from hypothesis import given
@@ -53,7 +54,7 @@ NMEA_TEXT = nmea_text()
 def _records(data: bytes, nmea: bool) -> int:
     """Input records as a reader sees them: physical lines (NMEA) or CSV records after the
     header (a quoted field may span lines)."""
-    text, _ = decode_text(data)
+    text, _ = decode_text(plain(data))
     if nmea:  # universal line ends (LF, CRLF, CR), as the reader and Python's text files
         return len(io.StringIO(text, newline=None).readlines())
     try:

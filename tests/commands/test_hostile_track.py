@@ -16,6 +16,7 @@ import pytest
 from hostile_inputs import assert_clean
 from hostile_inputs import mutated_csv
 from hostile_inputs import mutated_text
+from hostile_inputs import plain
 from hostile_inputs import run_cli
 from hostile_inputs import snapshot
 from hypothesis import Phase
@@ -57,14 +58,14 @@ def _labelled(data: bytes) -> bool:
     unlabelled and the multi-target tracker runs)."""
     from seatrack.io.table import decode_text
 
-    text, _ = decode_text(data)
+    text, _ = decode_text(plain(data))
     lines = text.splitlines()
     head = next(csv.reader(lines[:1]), []) if lines else []
     return "track" in [h.strip() for h in head]
 
 
 def _data_rows(data: bytes) -> int:
-    return sum(1 for ln in data.splitlines()[1:] if ln.strip(b" ,\r\n\t"))
+    return sum(1 for ln in plain(data).splitlines()[1:] if ln.strip(b" ,\r\n\t"))
 
 
 def _run(d: Path, plots: bytes, method: str, config: bytes | None = None) -> str:

@@ -120,7 +120,7 @@ def test_console_error_is_one_line_with_exit_status_2(tmp_path):
 @pytest.mark.parametrize(
     "option, value, message",
     [
-        ("--sigma-deg", "nan", "--sigma-deg must be a number of degrees in (0, 180)"),
+        ("--sigma-deg", "nan", "--sigma-deg must be a number of degrees in [1e-06, 180)"),
         ("--sigma-deg", "0", "--sigma-deg must be"),
         ("--sigma-deg", "200", "--sigma-deg must be"),
         ("--manoeuvres", "inf", "--manoeuvres: 'inf' is not a finite time"),
@@ -144,7 +144,7 @@ def test_bad_output_paths_fail_before_any_work(tmp_path, monkeypatch, capsys):
         (["--out", tmp_path / "adir"], "is a directory"),
         (["--out", tmp_path / "afile" / "r.json"], "is a file"),
         (["--plot", tmp_path / "adir"], "is a directory"),
-        (["--out", tmp_path / "r.json", "--plot", tmp_path / "r.json"], "the same file"),
+        (["--out", tmp_path / "r.png", "--plot", tmp_path / "r.png"], "the same file"),
     ]
     if os.geteuid() != 0:  # root writes anywhere
         ro = tmp_path / "ro"
@@ -153,7 +153,7 @@ def test_bad_output_paths_fail_before_any_work(tmp_path, monkeypatch, capsys):
     for args, message in cases:
         code, out, err = _main(monkeypatch, capsys, b, *args)
         assert code == 2 and message in err, (args, err)
-        assert err.startswith(f"error: {args[1]}") or "same file" in err
+        assert err.startswith(f"error: {args[0]} {args[1]}") or "same file" in err
         assert out == ""  # nothing was computed or printed
     assert not (tmp_path / "r.json").exists()
 

@@ -11,11 +11,11 @@ import pyarrow.parquet as pq
 import pytest
 
 from ais_samples import data_file
-from seatrack.commands.ais import parse_size
 from seatrack.filters.ais import AisTrackerConfig
 from seatrack.filters.ais import track_reports
 from seatrack.io.ais import read_ais
 from seatrack.io.ais import track_files
+from seatrack.io.budget import parse_size
 from seatrack.io.table import InputError
 
 FILES = ["dk_northsea_20221101_1h_selected.csv", "us_boston_201401_trajectools.csv"]

@@ -74,14 +74,22 @@ def track_to_files(
     scheduler: str | None = None,
 ) -> list[str]:
     """Track the AIS files ``inputs`` into TRACKS ``out`` (CSV or Parquet) and the map files
-    (GeoJSON, offline HTML); returns the summary lines. Every file is written atomically."""
+    (GeoJSON, offline HTML); returns the summary lines. Every file is written atomically.
+    Reports that look like SOG in m/s or swapped latitude and longitude are warned about
+    (:class:`seatrack.io.suspect.AisUnitCheck`) after the outputs are written."""
+    from seatrack.io.suspect import AisUnitCheck
+    from seatrack.io.suspect import warn
+
     want_map = geojson is not None or html is not None
     maps: list[Any] = []
+    units = AisUnitCheck()
 
     def collect(r: Any, tr: Any) -> None:
-        from seatrack.report.html import map_tracks
+        units.add(r)
+        if want_map:
+            from seatrack.report.html import map_tracks
 
-        maps.extend(map_tracks(r, tr))
+            maps.extend(map_tracks(r, tr))
 
     if use_dask:
         if want_map:
@@ -92,9 +100,7 @@ def track_to_files(
     else:
         from seatrack.io.ais.pipeline import track_files
 
-        summary = track_files(
-            inputs, out, cfg, memory_limit=memory_limit, on_group=collect if want_map else None
-        )
+        summary = track_files(inputs, out, cfg, memory_limit=memory_limit, on_group=collect)
     lines = summary.lines()
     from seatrack.io.atomic import atomic_path
 
@@ -114,6 +120,7 @@ def track_to_files(
                 summary="; ".join(lines),
                 tile_url=tile_url,
             )
+    warn(units.warnings(", ".join(map(str, inputs))))  # after every output: a run, no error
     lines.append(f"wrote {out} ({summary.rows} rows)")
     lines += [f"wrote {p}" for p in (geojson, html) if p is not None]
     return lines

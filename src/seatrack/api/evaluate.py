@@ -113,6 +113,32 @@ class Evaluation:
         return pd.DataFrame([{k: r.get(k) for k in keys} for r in self.rows], columns=keys)
 
 
+def evaluation_options(
+    sc: Any,
+    runs: int | None = None,
+    seed: int | None = None,
+    sensor: str | None = None,
+    skip: int = 3,
+    processes: int = 1,
+) -> tuple[int, int, Any]:
+    """The number of runs, the seed and the tracking sensor of an evaluation of scenario
+    ``sc``, every option checked (by its command-line name) before any work."""
+    from seatrack.evaluate.tracking import tracking_sensor
+    from seatrack.simulate.scenarios import MAX_RUNS
+
+    n = sc.runs if runs is None else runs
+    s = sc.seed if seed is None else seed
+    option_in("--runs", n, 1, MAX_RUNS)
+    option_in("--processes", processes, 1, MAX_PROCESSES)
+    option_in("--seed", s, 0, 2**63 - 1)
+    try:
+        sens = tracking_sensor(sc, sensor)
+    except ValueError as exc:
+        raise InputError(f"{'--sensor' if sensor is not None else sc.path}: {exc}") from None
+    check_skip(skip, sens.scan_times(sc.duration).size, sens.name)
+    return n, s, sens
+
+
 def run_evaluation(
     sc: Any,
     methods: str | Sequence[str] | None = None,
@@ -130,21 +156,12 @@ def run_evaluation(
     from seatrack.api.options import prepare_outputs
     from seatrack.evaluate.tracking import compare_methods
     from seatrack.evaluate.tracking import position_crb
+    from seatrack.evaluate.tracking import require_evaluation
     from seatrack.evaluate.tracking import summarize
-    from seatrack.evaluate.tracking import tracking_sensor
-    from seatrack.simulate.scenarios import MAX_RUNS
 
     names = method_names(methods)
-    n = sc.runs if runs is None else runs
-    s = sc.seed if seed is None else seed
-    option_in("--runs", n, 1, MAX_RUNS)
-    option_in("--processes", processes, 1, MAX_PROCESSES)
-    option_in("--seed", s, 0, 2**63 - 1)
-    try:
-        sens = tracking_sensor(sc, sensor)
-    except ValueError as exc:
-        raise InputError(f"{'--sensor' if sensor is not None else sc.path}: {exc}") from None
-    check_skip(skip, sens.scan_times(sc.duration).size, sens.name)
+    n, s, sens = evaluation_options(sc, runs, seed, sensor, skip, processes)
+    require_evaluation(sc, sens, names, n, processes)
     prepare_outputs(outputs, folders)
     errors = trial_errors(sc, sens, names, s)
     res = compare_methods(sc, names, n, s, sensor=sens.name, processes=processes, progress=progress)

@@ -134,11 +134,13 @@ def run_navigation(
     from seatrack.io.landmarks import read_map_csv
     from seatrack.io.navigation import read_echoes
     from seatrack.io.navigation import read_gyro
+    from seatrack.io.navigation import require_navigation
     from seatrack.navigation.navigator import navigate as run
 
     with contextlib.ExitStack() as stack:
         lm = read_map_csv(stack.enter_context(as_file(landmarks, "map")), origin)
         ech = read_echoes(stack.enter_context(as_file(echoes, "echoes")))
+        require_navigation(ech, cfg.antenna_period, cfg.steps_per_rev)  # the work budget
         gy = None if gyro is None else read_gyro(stack.enter_context(as_file(gyro, "gyro")))
     return run(lm, ech, list(x0), cfg, gyro=gy)
 

@@ -15,6 +15,7 @@ from typing import Any
 from seatrack.api.inputs import Source
 from seatrack.api.inputs import as_file
 from seatrack.api.inputs import describe_source
+from seatrack.io.table import MIN_SIGMA
 from seatrack.io.table import InputError
 
 __all__ = ["tma", "TMAResult", "check_manoeuvres", "solve"]
@@ -165,7 +166,7 @@ def tma(
         ``range_m`` (docs/formats.md). Or Debrief REP files (a list of paths: sensor lines
         and the host's track).
     sigma_deg : float, optional
-        Bearing standard deviation (degrees, in (0, 180)) where the table gives none
+        Bearing standard deviation (degrees, in [1e-6, 180)) where the table gives none
         (default: the sigma of ``config``, 1 degree).
     config : seatrack.tma.TMAConfig, optional
         Solver settings.
@@ -196,7 +197,7 @@ def tma(
     ------
     InputError
         A bad table (naming it, the line or row and the problem), a sigma outside
-        (0, 180) degrees, leg changes outside the bearings.
+        [1e-6, 180) degrees, leg changes outside the bearings.
 
     Examples
     --------
@@ -273,9 +274,10 @@ def solve(
     if sigma_deg is None:
         sigma_deg = math.degrees(cfg.sigma)
     ok = isinstance(sigma_deg, (int, float)) and math.isfinite(sigma_deg)
-    if not (ok and 0 < sigma_deg < 180):
+    if not (ok and MIN_SIGMA <= sigma_deg < 180):
         raise InputError(
-            f"{name['sigma_deg']} must be a number of degrees in (0, 180), got {sigma_deg}"
+            f"{name['sigma_deg']} must be a number of degrees in [{MIN_SIGMA:g}, 180), "
+            f"got {sigma_deg}"
         )
     speed = cfg.sound_speed if sound_speed_mps is None else float(sound_speed_mps)
     defaults = measurement_defaults(

@@ -18,8 +18,6 @@ written atomically.
 
 from __future__ import annotations
 
-import math
-import re
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
@@ -27,20 +25,6 @@ from typing import Any
 import typer
 
 from seatrack.errors import InputError
-
-_SIZE = re.compile(r"^\s*([0-9]*\.?[0-9]+)\s*([kmgt]?)i?b?\s*$", re.IGNORECASE)
-
-
-def parse_size(text: str, option: str = "--memory-limit") -> int:
-    """``"1.5G"``, ``"800M"``, ``"2GB"`` or a number of bytes -> bytes (at least 64 MiB)."""
-    m = _SIZE.match(text)
-    if m is None:
-        raise InputError(f"{option}: expected a size such as 2G or 800M, got {text!r}")
-    scale = {"": 1, "k": 1 << 10, "m": 1 << 20, "g": 1 << 30, "t": 1 << 40}
-    value = float(m.group(1)) * scale[m.group(2).lower()]
-    if not math.isfinite(value) or value < 64 << 20:
-        raise InputError(f"{option}: must be at least 64M, got {text!r}")
-    return int(value)
 
 
 def tracker_config(
@@ -53,17 +37,17 @@ def tracker_config(
     return ais_config(sigma_pos, max_gap, max_speed, max_accel, smooth, names)
 
 
-def _check_outputs(out: Path, extra: Sequence[Path | None], use_dask: bool) -> None:
-    """Check every output path before any work (a bad one fails fast)."""
+def _check_outputs(
+    out: Path, extra: Sequence[Path | None], use_dask: bool, inputs: Sequence[Path] = ()
+) -> None:
+    """Check every output path before any work (a bad one fails fast): none is an input
+    or another output."""
     from seatrack.commands.options import prepare_outputs
 
-    paths = [p for p in (out, *extra) if p is not None]
-    names = [str(Path(p).resolve()) for p in paths]
-    if len(set(names)) != len(names):
-        raise InputError("--out, --geojson and --html must be different files")
     if use_dask and out.suffix.lower() not in (".parquet", ".pq", ".csv"):
         raise InputError(f"--out: with --dask, give a .csv file or a .parquet folder, got {out}")
-    prepare_outputs(paths)
+    geojson, html = (list(extra) + [None, None])[:2]
+    prepare_outputs({"--out": out, "--geojson": geojson, "--html": html}, inputs=inputs)
 
 
 def track_files(paths: Sequence[str | Path], config: Any = None) -> tuple[Any, Any]:
@@ -140,19 +124,22 @@ def register(app: typer.Typer) -> None:
         ),
     ) -> None:
         """Track vessels in AIS logs: smoothed position, course, speed, turn rate, outliers."""
+        from seatrack.io.budget import parse_size
+        from seatrack.io.budget import set_budget
+        from seatrack.io.table import check_input_file
+
         cfg = tracker_config(sigma_pos, max_gap, max_speed, max_accel, not no_smooth)
         from seatrack.io.ais.pipeline import DEFAULT_MEMORY_LIMIT
 
         limit = DEFAULT_MEMORY_LIMIT if memory_limit is None else parse_size(memory_limit)
+        set_budget(memory_bytes=limit)  # the one budget of the run (see seatrack.io.budget)
         if scheduler is not None and not use_dask:
             raise InputError("--scheduler needs --dask")
         if use_dask and (geojson is not None or html is not None):
             raise InputError("--geojson and --html are not available with --dask")
         if tile_url is not None and "{z}" not in tile_url:
             raise InputError(f"--tile-url: needs {{z}}, {{x}} and {{y}}, got {tile_url!r}")
-        _check_outputs(out, [geojson, html], use_dask)
-        from seatrack.io.table import check_input_file
-
+        _check_outputs(out, [geojson, html], use_dask, inputs)
         for p in inputs:
             check_input_file(p, "an AIS file")
         from seatrack.api.ais import track_to_files

@@ -149,7 +149,10 @@ def register(app: typer.Typer) -> None:
         if live:
             _live_demo(http, speed)
             return
-        typer.echo(run_demo(out, runs, processes), nl=False)
+        from seatrack.io.atomic import immediate_outputs
+
+        with immediate_outputs():  # the demo tracks the data files it writes
+            typer.echo(run_demo(out, runs, processes), nl=False)
         typer.echo(
             f"open {out / 'report.html'}; try: seatrack track "
             f"{out / 'data' / 'plots_radar.csv'} --method turning --out tracks.csv"

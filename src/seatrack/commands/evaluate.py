@@ -50,16 +50,21 @@ def register(app: typer.Typer) -> None:
         the 95% chi-square bounds, and the time per plot. Results do not depend on
         --processes.
         """
+        from seatrack.api.evaluate import evaluation_options
         from seatrack.api.evaluate import run_evaluation
+        from seatrack.api.options import prepare_outputs
         from seatrack.api.simulate import load
+        from seatrack.simulate.scenarios import resolve_scenario
 
-        sc = load(scenario)
+        source = resolve_scenario(scenario)
+        prepare_outputs({"--csv": csv_out}, {"--plots": plots}, inputs=[source])
+        sc = load(source)
+        n, s, _ = evaluation_options(sc, runs, seed, sensor, skip, processes)
         if sc.multitarget is not None:  # unlabelled plots: the multi-target tracker
             from seatrack.evaluate.multitarget import evaluate_multitarget
 
             mt = None if methods is None else [m.strip() for m in methods.split(",") if m.strip()]
-            n_mt, s_mt = sc.runs if runs is None else runs, sc.seed if seed is None else seed
-            typer.echo(evaluate_multitarget(sc, n_mt, s_mt, mt, sensor, csv_out, plots))
+            typer.echo(evaluate_multitarget(sc, n, s, mt, sensor, csv_out, plots))
             return
         pngs = [plots / "pos_rmse.png", plots / "anees.png"] if plots is not None else []
         ev = run_evaluation(

@@ -10,15 +10,12 @@ prints the counters.
 
 from __future__ import annotations
 
-import asyncio
-import json
-import signal
 from pathlib import Path
 from typing import Any
 
 import typer
 
-from seatrack.io.table import InputError
+from seatrack.errors import InputError
 
 __all__ = ["register", "run_live"]
 
@@ -26,6 +23,10 @@ __all__ = ["register", "run_live"]
 async def run_live(opts: Any, echo: Any = print, on_start: Any = None) -> bool:
     """Run the live process; True if it was stopped by a signal. ``on_start(proc)`` is
     called once the sources and the web server are up."""
+    import asyncio
+    import json
+    import signal
+
     from seatrack.live.process import LiveProcess
 
     stop = asyncio.Event()
@@ -136,5 +137,7 @@ def register(app: typer.Typer) -> None:
             from seatrack.commands.options import prepare_outputs
 
             prepare_outputs(folders=[store.parent if str(store.parent) else Path(".")])
+        import asyncio
+
         if asyncio.run(run_live(opts, typer.echo)):
             raise typer.Abort()

@@ -137,7 +137,7 @@ def register(app: typer.Typer) -> None:
 
         x0 = parse_start(start)
         org = _origin(origin)
-        prepare_outputs([out])
+        prepare_outputs({"--out": out}, inputs=[map_file, echoes, gyro])
         res = run_navigation(map_file, echoes, x0, cfg, gyro, org)
         write_nav(out, res)
         typer.echo(
@@ -175,6 +175,7 @@ def register(app: typer.Typer) -> None:
         from seatrack.io.landmarks import write_map_csv
         from seatrack.io.navigation import read_echoes
         from seatrack.io.navigation import read_gyro
+        from seatrack.io.navigation import require_navigation
         from seatrack.navigation.navigator import navigate
         from seatrack.navigation.survey import SurveyConfig
         from seatrack.navigation.survey import survey
@@ -189,14 +190,14 @@ def register(app: typer.Typer) -> None:
             raise InputError(
                 f"give one --start, or one per --echoes ({len(echoes)}), got {len(start)}"
             )
-        prepare_outputs([out])
+        prepare_outputs({"--out": out}, inputs=[map_file, *echoes, *gy])
         lm = read_map_csv(map_file, org)
         runs = []
         for i, e in enumerate(echoes):
             x0 = x0s[i if len(start) > 1 else 0]
-            runs.append(
-                navigate(lm, read_echoes(e), x0, cfg, gyro=read_gyro(gy[i]) if gy else None)
-            )
+            ech = read_echoes(e)
+            require_navigation(ech, cfg.antenna_period, cfg.steps_per_rev)
+            runs.append(navigate(lm, ech, x0, cfg, gyro=read_gyro(gy[i]) if gy else None))
         res = survey(lm, runs, SurveyConfig(min_visibility=min_visibility, drop_poor=drop_poor))
         write_map_csv(res.corrected, out)
         for j in range(len(lm)):

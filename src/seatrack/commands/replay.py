@@ -9,7 +9,7 @@ from pathlib import Path
 
 import typer
 
-from seatrack.io.table import InputError
+from seatrack.errors import InputError
 
 __all__ = ["register", "udp_target"]
 

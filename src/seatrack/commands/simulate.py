@@ -36,8 +36,12 @@ def register(app: typer.Typer) -> None:
         column (targets and clutter mixed, the multi-target tracker's input),
         plot_origin_<sensor>.csv (the target of each plot, or clutter) and truth.csv.
         """
+        from seatrack.api.options import prepare_outputs
         from seatrack.api.simulate import load
         from seatrack.api.simulate import simulate_to_folder
+        from seatrack.simulate.scenarios import resolve_scenario
 
-        for path, n in simulate_to_folder(load(scenario), out, seed, run):
+        source = resolve_scenario(scenario)
+        prepare_outputs({}, {"--out": out}, inputs=[source])
+        for path, n in simulate_to_folder(load(source), out, seed, run):
             typer.echo(f"wrote {path} ({n} rows)")

@@ -36,6 +36,10 @@ def _parse_times(text: str | None) -> list[float] | None:
         if not math.isfinite(v):
             raise InputError(f"--manoeuvres: {part!r} is not a finite time")
         out.append(v)
+    if not out:
+        raise InputError(
+            f"--manoeuvres: no time in {text!r}; give T1,T2,... (s) or leave the option out"
+        )
     if any(b <= a for a, b in zip(out, out[1:], strict=False)):
         raise InputError(f"--manoeuvres: times must be strictly increasing, got {text}")
     return out
@@ -101,25 +105,20 @@ def register(app: typer.Typer) -> None:
         speed and base frequencies of every contact with 1-sigma / 95 % values, support
         values, multi-leg targets and an observability check."""
         from seatrack.api.tma import solve
+        from seatrack.commands.options import prepare_outputs
         from seatrack.io.atomic import atomic_write
-        from seatrack.io.atomic import check_output_path
         from seatrack.io.rep import is_rep
+        from seatrack.io.table import MIN_SIGMA
         from seatrack.io.tma import OPTION_NAMES
         from seatrack.io.tma import parse_tonal_values
         from seatrack.io.tma import solution_summary
 
-        if not (math.isfinite(sigma_deg) and 0 < sigma_deg < 180):
+        if not (math.isfinite(sigma_deg) and MIN_SIGMA <= sigma_deg < 180):
             raise InputError(
-                f"--sigma-deg must be a number of degrees in (0, 180), got {sigma_deg}"
+                f"--sigma-deg must be a number of degrees in [{MIN_SIGMA:g}, 180), got {sigma_deg}"
             )
-        named = (("--out", out), ("--plot", plot), ("--rep-out", rep_out))
-        given = [(n, p) for n, p in named if p is not None]
-        for i, (n1, p1) in enumerate(given):
-            for n2, p2 in given[i + 1 :]:
-                if p1.resolve() == p2.resolve():
-                    raise InputError(f"{n1} and {n2} name the same file {p1}")
-        for _, path in given:
-            check_output_path(path)  # before any work
+        outputs = {"--out": out, "--plot": plot, "--rep-out": rep_out}
+        prepare_outputs(outputs, inputs=[*bearings, support], images=["--plot"])
         if rep_out is not None and not all(is_rep(p) for p in bearings):
             raise InputError("--rep-out needs REP input (the solution needs a geographic frame)")
         times = _parse_times(manoeuvres)

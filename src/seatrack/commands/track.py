@@ -80,7 +80,8 @@ def register(app: typer.Typer) -> None:
         from seatrack.io.multitarget import write_outputs
 
         check_method(method)  # unknown method: fail before any work
-        prepare_outputs([out, plots_out, plot])
+        outputs = {"--out": out, "--plots-out": plots_out, "--plot": plot}
+        prepare_outputs(outputs, inputs=[plots_csv, config], images=["--plot"])
         table, source = config_table(config)
         res = run_track(plots_csv, method, table, source, association, all_tracks)
         if not res.labelled:

@@ -410,6 +410,35 @@ def gospa_series(scores: RunScores) -> dict[str, FloatArray]:
     }
 
 
+#: peak bytes per run, target and scan of a multi-target evaluation, estimates (not
+#: measured): the simulated plots and truth kept for every run, and per method and
+#: association the tracker's output
+MT_BYTES_PER_STEP = 200
+MT_BYTES_PER_STEP_AND_TRACKER = 300
+#: seconds per run, target, scan and tracker, an estimate (a plot through gating,
+#: association and a filter update)
+MT_SECONDS_PER_STEP = 2e-4
+
+
+def require_multitarget(scenario: Any, sensor: Any, methods: Sequence[str], runs: int) -> None:
+    """Refuse a multi-target evaluation over the memory or time budget
+    (:mod:`seatrack.io.budget`): runs x expected targets x scans x trackers (each method
+    with GNN and JPDA)."""
+    from seatrack.io.budget import require
+
+    scans = int(np.floor(scenario.duration / sensor.scan_period + 1e-9)) + 1
+    targets = len(scenario.targets) + scenario.multitarget.expected_targets(
+        scenario.duration, sensor.scan_period
+    )
+    steps = float(runs) * max(targets, 1.0) * scans
+    trackers = 2 * len(methods)
+    require(
+        f"evaluate: {runs} runs x {targets:.3g} targets x {scans} scans x {trackers} trackers",
+        memory_bytes=steps * (MT_BYTES_PER_STEP + trackers * MT_BYTES_PER_STEP_AND_TRACKER),
+        seconds=steps * trackers * MT_SECONDS_PER_STEP,
+    )
+
+
 def evaluate_multitarget(
     scenario: Any,
     runs: int,
@@ -439,6 +468,7 @@ def evaluate_multitarget(
 
     sens = tracking_sensor(scenario, sensor)
     names = list(methods) if methods else ["ekf"]
+    require_multitarget(scenario, sens, names, runs)
     sims = [
         simulate_scenario(scenario, np.random.default_rng(s), sens)
         for s in np.random.SeedSequence(seed).spawn(runs)

@@ -175,7 +175,7 @@ class TurningConfig(Checked):
         "continuous", choices=("continuous", "diagonal"), doc="S2 heading-filter noise form"
     )
     turn_rate_threshold: float = param(1.0, doc="S3 threshold on d_omega", min=0)
-    queue_length: int = param(5, doc="S3/S4 queue length M (> 3)")
+    queue_length: int = param(5, doc="S3/S4 queue length M (> 3)", max=1000)
     count_min: int | None = param(None, doc="S4 count K (None: M - 2)")
     delta_omega_threshold: float = param(
         math.degrees(0.02), key="delta_omega_threshold_dps", unit="deg/s",

@@ -55,7 +55,7 @@ class TurningLevelsConfig(OutlierConfig, LevelConfig):
     )  # fmt: skip
     sigma_omega0: float = sigma_omega0_param("initial turn-rate std of the heading filter")
     turn_rate_threshold: float = param(1.0, doc="S3 threshold on d_omega", min=0)
-    queue_length: int = param(5, doc="S3/S4 queue length M (> 3)")
+    queue_length: int = param(5, doc="S3/S4 queue length M (> 3)", max=1000)
     delta_omega_threshold: float = param(
         math.degrees(0.02), key="delta_omega_threshold_dps", unit="deg/s",
         doc="S4 threshold on delta omega", min=0,

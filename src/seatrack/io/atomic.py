@@ -13,7 +13,19 @@ a half-written file.
   while writing any of them keeps all the previous files);
 * :func:`check_output_path` / :func:`check_output_dir` -- the one check every command runs
   on an output file / folder before doing any work, so a bad path fails fast with
-  :class:`OutputError` and nothing is computed in vain.
+  :class:`OutputError` and nothing is computed in vain;
+* :func:`output_transaction` -- every output of one command replaced together: while it is
+  open, :func:`atomic_path` keeps each finished temporary instead of moving it; they all
+  replace their destinations when the block ends without an error, and are all removed
+  when it ends with one (a full disk on the last output, an interrupt). The ``seatrack``
+  command line runs every command inside one (the demo, which reads back the data files
+  it writes, opts out with :func:`immediate_outputs`).
+
+Output paths: an existing output must be a regular file (a device node, a pipe or a socket
+is refused: replacing ``/dev/null`` with a regular file is never what was meant). An output
+that is a symbolic link is resolved: the file it points to is replaced and the link is
+kept. The file name must leave room for the temporary's name (``.NAME.XXXXXXXX.SUFFIX``)
+within the file system's limit.
 
 Output folders are created when missing (like ``mkdir -p``); a path that is a directory,
 or whose parent is a file, or a folder that is not writable is refused with a clear message.
@@ -38,7 +50,14 @@ __all__ = [
     "check_output_dir",
     "check_output_path",
     "atomic_files",
+    "output_transaction",
+    "pending_output",
+    "immediate_outputs",
+    "TEMP_NAME_EXTRA",
 ]
+
+#: characters the temporary's name adds to the output's name (``.`` + ``.XXXXXXXX``)
+TEMP_NAME_EXTRA = 10
 
 
 class OutputError(UserError, OSError):
@@ -104,12 +123,29 @@ def check_output_path(path: str | os.PathLike[str], *, create_parent: bool = Tru
         raise OutputError(f"{path!s}: not a file name")
     if p.is_dir():
         raise OutputError(f"{p}: is a directory, expected a file name")
+    if p.is_symlink():
+        p = Path(os.path.realpath(p))  # the link is kept, its target replaced
+    if p.exists() and not p.is_file():
+        raise OutputError(f"{path}: not a regular file (a device, pipe or socket), not replaced")
     problem = _folder_problem(p.parent, create_parent)
     if problem is not None:
         raise OutputError(f"{p}: {problem}")
     if p.exists() and not os.access(p, os.W_OK):
         raise OutputError(f"{p}: file is not writable")
+    most = _name_max(p.parent) - TEMP_NAME_EXTRA - len(p.suffix)
+    if len(os.fsencode(p.name)) > most:
+        raise OutputError(
+            f"{path}: file name too long (at most {most} bytes, to leave room for the "
+            "temporary file's name)"
+        )
     return p
+
+
+def _name_max(folder: Path) -> int:
+    try:
+        return int(os.pathconf(folder if folder.is_dir() else ".", "PC_NAME_MAX"))
+    except (OSError, ValueError, AttributeError):
+        return 255
 
 
 def _umask_mode() -> int:
@@ -126,6 +162,7 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
     the file name (``savefig``) see the right one.
     """
     dest = check_output_path(path)
+    tx = _active()
     try:
         fd, tmp = tempfile.mkstemp(
             dir=dest.parent,
@@ -143,7 +180,10 @@ def atomic_path(path: str | os.PathLike[str], suffix: str | None = None) -> Iter
         with open(tmp_path, "rb+") as fh:  # data of the library's writer reach the disk
             os.fsync(fh.fileno())
         os.chmod(tmp_path, _umask_mode())
-        os.replace(tmp_path, dest)
+        if tx is None or tx.direct:
+            os.replace(tmp_path, dest)
+        else:
+            tx.add(tmp_path, dest)
     except BaseException as exc:
         with contextlib.suppress(OSError):
             tmp_path.unlink()
@@ -196,3 +236,107 @@ def atomic_files(paths: list[Path]) -> Iterator[list[Path]]:
     """
     with contextlib.ExitStack() as stack:
         yield [stack.enter_context(atomic_path(p)) for p in paths]
+
+
+class _Transaction:
+    """Finished temporaries of one command and the files they replace, in write order."""
+
+    def __init__(self, direct: bool = False) -> None:
+        self.direct = direct  # replace each output at once (immediate_outputs)
+        self.pid = os.getpid()
+        self.pending: dict[Path, Path] = {}  # destination -> temporary
+
+    def add(self, tmp: Path, dest: Path) -> None:
+        dest = _key(dest)
+        old = self.pending.pop(dest, None)
+        if old is not None:  # written twice: the last version wins
+            with contextlib.suppress(OSError):
+                old.unlink()
+        self.pending[dest] = tmp
+
+    def discard(self) -> None:
+        for tmp in self.pending.values():
+            with contextlib.suppress(OSError):
+                tmp.unlink()
+        self.pending.clear()
+
+    def commit(self) -> None:
+        items = list(self.pending.items())
+        self.pending.clear()
+        for k, (dest, tmp) in enumerate(items):
+            try:
+                os.replace(tmp, dest)
+            except OSError as exc:
+                for _, t in items[k:]:
+                    with contextlib.suppress(OSError):
+                        t.unlink()
+                raise OutputError(f"{dest}: cannot replace ({exc.strerror or exc})") from None
+
+
+_TRANSACTIONS: list[_Transaction] = []
+
+
+def _active() -> _Transaction | None:
+    """The open transaction of this process (a forked worker writes directly)."""
+    if _TRANSACTIONS and _TRANSACTIONS[-1].pid == os.getpid():
+        return _TRANSACTIONS[-1]
+    return None
+
+
+@contextlib.contextmanager
+def output_transaction() -> Iterator[None]:
+    """Replace every output written inside the block together, at its end.
+
+    Each :func:`atomic_path` / :func:`atomic_write` / :func:`atomic_files` inside the block
+    writes and fsyncs its temporary as usual but leaves it beside its destination; when
+    the block ends without an error the temporaries replace their destinations, in the
+    order they were written (renames in the same folder: no data is written then, so a
+    full disk cannot stop them). When the block ends with an error or an interrupt, every
+    temporary is removed and every previous output is intact. A file the command reads
+    back before the end (a picture embedded in a report) is found with
+    :func:`pending_output`. Transactions nest: an inner one commits into the outer.
+    """
+    tx = _Transaction()
+    outer = _active()
+    _TRANSACTIONS.append(tx)
+    try:
+        yield
+    except BaseException:
+        _TRANSACTIONS.remove(tx)
+        tx.discard()
+        raise
+    _TRANSACTIONS.remove(tx)
+    if outer is not None:
+        for dest, tmp in tx.pending.items():
+            outer.add(tmp, dest)
+        return
+    tx.commit()
+
+
+@contextlib.contextmanager
+def immediate_outputs() -> Iterator[None]:
+    """Inside an :func:`output_transaction`, a block whose outputs replace their files at
+    once, as without a transaction: for a command that reads back what it wrote (the demo
+    writes its data files, then tracks them)."""
+    tx = _Transaction(direct=True)
+    _TRANSACTIONS.append(tx)
+    try:
+        yield
+    finally:
+        _TRANSACTIONS.remove(tx)
+
+
+def pending_output(path: str | os.PathLike[str]) -> Path:
+    """Where the content of output ``path`` is now: its finished temporary while an
+    :func:`output_transaction` holds it, else ``path`` itself."""
+    tx = _active()
+    if tx is not None:
+        tmp = tx.pending.get(_key(Path(path)))
+        if tmp is not None:
+            return tmp
+    return Path(path)
+
+
+def _key(p: Path) -> Path:
+    """The destination as the transaction knows it: absolute, a symbolic link resolved."""
+    return Path(os.path.realpath(p)) if p.is_symlink() else Path(os.path.abspath(p))

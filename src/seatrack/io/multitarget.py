@@ -41,6 +41,9 @@ from seatrack.filters.base import SensorNoise
 from seatrack.io.atomic import atomic_path
 from seatrack.io.atomic import atomic_write
 from seatrack.io.atomic import check_output_path
+from seatrack.io.compressed import open_input
+from seatrack.io.plots import LIMITS as PLOT_LIMITS
+from seatrack.io.plots import unit_warnings
 from seatrack.io.table import InputError
 from seatrack.io.table import Table
 from seatrack.io.table import check_input_file
@@ -84,7 +87,7 @@ def has_track_column(path: str | Path) -> bool:
     p = check_input_file(path, "a CSV file")
     if p.suffix.lower() == ".ast":  # ASTERIX CAT048: plots without track labels
         return False
-    with p.open("rb") as fh:
+    with open_input(p) as fh:  # decompressed when gzip, zstd or bzip2
         head = fh.read(1 << 16).splitlines()  # LF, CRLF or the old CR alone
     first = head[0] if head else b""
     text, _ = decode_text(first)  # UTF-8 (BOM dropped), else Latin-1, as every reader
@@ -105,7 +108,16 @@ def _check_values(tab: Table) -> None:
         if c in tab:
             nan = np.isnan(tab[c])
             bad(nan & ~nan.all(), f"column {c} is empty here but filled on other rows")
-    bad(tab["range_m"] <= 0, "range_m must be > 0")
+    rng, t = tab["range_m"], tab["time_s"]
+    bad(rng <= 0, "range_m must be > 0")
+    lo, hi = PLOT_LIMITS["min_range_m"], PLOT_LIMITS["range_m"]
+    bad(rng < lo, f"range_m = {rng[np.argmax(rng < lo)]:g} is implausible (< {lo:g} m)")
+    bad(rng > hi, f"range_m = {rng[np.argmax(rng > hi)]:g} is implausible (> {hi:g} m)")
+    far = np.abs(t) > PLOT_LIMITS["time_s"]
+    bad(far, f"time_s = {t[np.argmax(far)]:g} is implausible (|t| > {PLOT_LIMITS['time_s']:.4g} s)")
+    gap = np.zeros(t.size, dtype=bool)
+    gap[1:] = np.diff(t) > PLOT_LIMITS["gap_s"]  # in time order (checked after reading)
+    bad(gap, f"time gap of more than {PLOT_LIMITS['gap_s']:g} s since the previous plot")
     az = tab["azimuth_deg"]
     bad((az < 0) | (az >= 360), "azimuth_deg must be in [0, 360)")
     if "elevation_deg" in tab:
@@ -132,8 +144,9 @@ def read_unlabelled_plots(path: str | Path) -> Plots:
 
         return cat048_plots(read_cat048(path), str(path))
     tab = read_csv_table(path, REQUIRED, OPTIONAL)
-    _check_values(tab)
     check_times(tab, "time_s", strict=False)
+    _check_values(tab)
+    unit_warnings(tab)
     t = tab["time_s"]
     sensor = np.zeros((t.size, 3))
     for k, c in enumerate(("sensor_x_m", "sensor_y_m", "sensor_z_m")):

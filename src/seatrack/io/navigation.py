@@ -18,6 +18,8 @@ from numpy.typing import NDArray
 
 from seatrack.geometry import bearing_rad_to_deg
 from seatrack.io.atomic import atomic_write
+from seatrack.io.suspect import rad_per_s_warning
+from seatrack.io.suspect import warn
 from seatrack.io.table import between
 from seatrack.io.table import check_times
 from seatrack.io.table import positive
@@ -28,7 +30,15 @@ from seatrack.navigation.navigator import NavResult
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["read_echoes", "write_echoes", "read_gyro", "write_gyro", "write_nav", "NAV_COLUMNS"]
+__all__ = [
+    "require_navigation",
+    "read_echoes",
+    "write_echoes",
+    "read_gyro",
+    "write_gyro",
+    "write_nav",
+    "NAV_COLUMNS",
+]
 
 NAV_COLUMNS = (
     "time_s",
@@ -93,6 +103,7 @@ def read_gyro(path: str | Path) -> tuple[FloatArray, FloatArray]:
         checks=(seconds("time_s"), between("turn_rate_dps", -lim, lim)),
     )
     check_times(t, "time_s", strict=True)
+    warn([rad_per_s_warning(t.path, "turn_rate_dps", t["turn_rate_dps"])])
     return t["time_s"], np.radians(t["turn_rate_dps"])
 
 
@@ -124,3 +135,29 @@ def write_nav(path: str | Path, res: NavResult) -> None:
     fmt = ["%.3f", "%.2f", "%.2f", "%.3f", "%.3f", "%.3f", "%.4f", "%.2f", "%.2f", "%.3f"]
     with atomic_write(path) as fh:
         np.savetxt(fh, data, fmt=fmt, delimiter=",", header=",".join(NAV_COLUMNS), comments="")
+
+
+#: peak bytes per predictor tick of a navigation run, an estimate: the state, its sigmas
+#: and time (104 bytes) in the loop and the result, and the NAV.csv text being written
+NAV_BYTES_PER_TICK = 500
+#: seconds per predictor tick of the navigation loop, an estimate (a log of 9.6e6 cycles
+#: takes about 15 min on a 2-core machine: 94 us)
+NAV_SECONDS_PER_TICK = 1e-4
+
+
+def require_navigation(echoes: Echoes, antenna_period_s: float, steps_per_rev: int) -> None:
+    """Refuse a navigation run over the memory or time budget (:mod:`seatrack.io.budget`),
+    from the span of the echo log: one predictor tick per ``antenna_period_s /
+    steps_per_rev`` seconds, however few the echoes (a gap costs as much as a log)."""
+    from seatrack.io.budget import require
+
+    t = np.asarray(echoes.t, float)
+    if t.size < 2:
+        return
+    span = float(t.max() - t.min())
+    ticks = span * steps_per_rev / antenna_period_s
+    require(
+        f"{echoes.source}: the echo log spans {span:g} s, {ticks:.3g} filter cycles",
+        memory_bytes=ticks * NAV_BYTES_PER_TICK,
+        seconds=ticks * NAV_SECONDS_PER_TICK,
+    )

@@ -27,16 +27,29 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.filters.base import Plots
+from seatrack.io.suspect import km_warning
+from seatrack.io.suspect import ms_warning
+from seatrack.io.suspect import radians_warning
+from seatrack.io.suspect import warn
 from seatrack.io.table import MAX_DISTANCE_M
+from seatrack.io.table import MAX_TEXT_CHARS
 from seatrack.io.table import MAX_TIME_S
 from seatrack.io.table import InputError
 from seatrack.io.table import Table
 from seatrack.io.table import check_times
 from seatrack.io.table import read_csv_table
+from seatrack.io.table import read_input_bytes
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["read_plots", "read_plot_tracks", "split_tracks", "PLOT_COLUMNS", "LIMITS"]
+__all__ = [
+    "read_plots",
+    "read_plot_tracks",
+    "split_tracks",
+    "unit_warnings",
+    "PLOT_COLUMNS",
+    "LIMITS",
+]
 
 PLOT_COLUMNS = ("time_s", "range_m", "azimuth_deg")
 _OPTIONAL = (
@@ -52,6 +65,7 @@ _SENSOR = ("sensor_x_m", "sensor_y_m", "sensor_z_m")
 #: plausibility limits (absolute values): beyond them a value is an input error
 LIMITS = {
     "range_m": 1e7,  # 10,000 km: beyond any radar or sonar
+    "min_range_m": 1e-3,  # 1 mm: below any radar or sonar (a denormal number is a bug)
     "time_s": MAX_TIME_S,  # seconds: Unix time of 2100-01-01
     "gap_s": 1e6,  # 11.6 days between two plots of one track
     "range_rate_mps": 1e4,  # 10 km/s
@@ -79,6 +93,7 @@ def read_plots(path: str | Path) -> Plots:
     n = len(tab)
     labels = tab["track"] if "track" in tab else np.full(n, "1")
     _check_gaps(tab, labels)
+    unit_warnings(tab, labels)
     t = tab["time_s"]
     sensor = np.zeros((n, 3))
     for k, c in enumerate(_SENSOR):
@@ -97,19 +112,31 @@ def read_plots(path: str | Path) -> Plots:
     )
 
 
+def unit_warnings(tab: Table, labels: NDArray[np.str_] | None = None) -> None:
+    """Warn (one line each, :mod:`seatrack.io.suspect`) when azimuths look like radians,
+    ranges like kilometres or times like milliseconds."""
+    warn(
+        (
+            radians_warning(tab.path, "azimuth_deg", tab["azimuth_deg"]),
+            km_warning(tab.path, "range_m", tab["range_m"]),
+            ms_warning(tab.path, "time_s", tab["time_s"], labels),
+        )
+    )
+
+
 def _read_fast(path: Path) -> Table | None:
     """Columnar read (pyarrow) of a well-formed file, or None for anything unusual (blank
     lines, quoted line breaks, padded or empty required cells, text in number columns,
     literal NaN/inf...), which the row-by-row reader then reports with its line."""
     import pyarrow as pa
+    import pyarrow.compute as pc
     import pyarrow.csv as pacsv
 
-    try:
-        data = path.read_bytes()
-    except OSError:
-        return None
+    data = read_input_bytes(path)  # within the memory budget, decompressed
     head = data.split(b"\n", 1)[0].decode("utf-8-sig", "replace").rstrip("\r").split(",")
     if any(h != h.strip() for h in head) or not set(PLOT_COLUMNS) <= set(head):
+        return None
+    if len(set(head)) != len(head):  # a column named twice: reported by the row reader
         return None
     present = [c for c in (*PLOT_COLUMNS, *_OPTIONAL) if c in head]
     types = {c: (pa.string() if c == "track" else pa.float64()) for c in present}
@@ -129,6 +156,9 @@ def _read_fast(path: Path) -> Table | None:
     for c in present:
         col = table.column(c)
         if c == "track":
+            longest = pc.max(pc.utf8_length(col)).as_py() or 0
+            if longest > MAX_TEXT_CHARS:  # reported with its line by the row reader
+                return None
             labels = np.asarray(col.to_pylist(), dtype=str)
             if (np.char.strip(labels) != labels).any():
                 return None
@@ -190,6 +220,8 @@ def _check_values(tab: Table) -> None:
                 _bad(tab, nan, f"column {c} is empty here but filled on other rows")
     rng = tab["range_m"]
     _bad(tab, rng <= 0, "range_m must be > 0")
+    tiny = rng < LIMITS["min_range_m"]
+    _bad(tab, tiny, f"range_m = {rng[np.argmax(tiny)]:g} is implausible (< 1e-3 m)")
     i = np.argmax(rng > LIMITS["range_m"])
     _bad(tab, rng > LIMITS["range_m"], f"range_m = {rng[i]:g} is implausible (> 1e7 m)")
     t = tab["time_s"]

@@ -50,6 +50,9 @@ import numpy as np
 
 from seatrack.geometry import bearing_rad_to_deg
 from seatrack.geometry import deg2rad
+from seatrack.io.suspect import ms_warning
+from seatrack.io.suspect import warn
+from seatrack.io.table import MIN_SIGMA
 from seatrack.io.table import InputError
 from seatrack.io.table import Table
 from seatrack.io.table import check_times
@@ -185,17 +188,19 @@ def read_bearings(
         i = bad[0]
         raise InputError(f"{p}, line {tab.lines[i]}: bearing_deg = {b[i]:g} is outside [0, 360)")
     sig = tab["sigma_deg"] if "sigma_deg" in tab else np.full(len(tab), np.nan)
-    bad = np.flatnonzero((sig <= 0) | (sig >= LIMITS["sigma_deg"]))
+    bad = np.flatnonzero((sig < MIN_SIGMA) | (sig >= LIMITS["sigma_deg"]))
     if bad.size:
         i = bad[0]
         raise InputError(
-            f"{p}, line {tab.lines[i]}: sigma_deg = {sig[i]:g} must be in (0, 180) degrees"
+            f"{p}, line {tab.lines[i]}: sigma_deg = {sig[i]:g} must be in [{MIN_SIGMA:g}, 180) "
+            "degrees"
         )
     _check_abs(tab, p, "time_s", LIMITS["time_s"], "s")
     for c in ("observer_x_m", "observer_y_m"):
         _check_abs(tab, p, c, LIMITS["position_m"], "m")
     tab.columns["contact"] = cid
     check_times(tab, "time_s", group="contact", strict=True)
+    warn([ms_warning(p, "time_s", tab["time_s"], cid)])
     out: dict[str, Bearings] = {}
     for c in dict.fromkeys(cid.tolist()):
         m = cid == c

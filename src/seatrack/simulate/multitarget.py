@@ -100,6 +100,12 @@ class TargetPopulation(Checked):
     )  # fmt: skip
     crossings: int = param(2, doc="pairs of targets crossing each other", min=0)
 
+    def expected_targets(self, duration_s: float, scan_s: float) -> float:
+        """Targets expected over a run of ``duration_s``: those at the start, both ships of
+        each crossing and the births, ``births_per_scan`` per scan of ``scan_s`` seconds."""
+        n_scans = math.floor(duration_s / scan_s + 1e-9) + 1
+        return self.targets + 2 * self.crossings + self.births_per_scan * n_scans
+
     def __post_init__(self) -> None:
         super().__post_init__()
         edge = to_edge(self)

@@ -75,6 +75,7 @@ from numpy.typing import NDArray
 from seatrack.geometry import KNOT_MPS
 from seatrack.geometry import geodetic_to_enu
 from seatrack.io.table import MAX_TIME_S
+from seatrack.io.table import MIN_SIGMA
 from seatrack.io.table import InputError
 from seatrack.simulate.multitarget import TargetPopulation
 from seatrack.simulate.multitarget import parse_multitarget
@@ -532,7 +533,8 @@ def _sensor(r: TomlReader, raw: Any, prefix: str, index: int, duration: float) -
     sp = join_key(prefix, "sigma")
     r.check_keys(sig_tab, sp, [_SIGMA_KEYS[c][0] for c in comps])
     sigma = tuple(
-        r.req(sig_tab, sp, _SIGMA_KEYS[c][0], positive=True) * _SIGMA_KEYS[c][1] for c in comps
+        r.req(sig_tab, sp, _SIGMA_KEYS[c][0], positive=True, minimum=MIN_SIGMA) * _SIGMA_KEYS[c][1]
+        for c in comps
     )
     eps = r.number(tab, prefix, "epsilon", default=0.0, minimum=0.0, maximum=1.0)
     scale_raw = tab.get("outlier_scale", 1.0)
@@ -652,20 +654,25 @@ def parse_scenario(doc: Mapping[str, Any], path: str = "<scenario>") -> Scenario
     assert dt is not None
     if dt > duration:
         raise r.error("dt_s", f"longer than duration_s ({duration:g} s)")
-    _check_work(r, duration, dt, len(targets), sensors)
-    extra = _method_tables(r, doc.get("evaluate", {}))
     mt = doc.get("multitarget")
     population = None if mt is None else parse_multitarget(r.table(mt, "multitarget"), path)
+    _check_work(r, duration, dt, len(targets), sensors, population)
+    extra = _method_tables(r, doc.get("evaluate", {}))
     return Scenario(
         name, duration, dt, own, targets, sensors, seed, runs, description, path, extra, population
     )
 
 
 def _check_work(
-    r: TomlReader, duration: float, dt: float, n_targets: int, sensors: Sequence[SensorConfig]
-) -> None:
-    """Bound the memory and time one simulated run takes, before anything is allocated."""
-    total = 0
+    r: TomlReader, duration: float, dt: float, n_scripted: int, sensors: Sequence[SensorConfig],
+    population: TargetPopulation | None = None,
+) -> None:  # fmt: skip
+    """Bound the memory and time one simulated run takes, before anything is allocated
+    (the scripted targets and the expected ones of a ``[multitarget]`` population)."""
+    fastest = min((s.scan_period for s in sensors), default=dt)
+    born = population.expected_targets(duration, fastest) if population else 0.0
+    n_targets = n_scripted + born
+    total = 0.0
     for i, s in enumerate(sensors):
         n = math.floor(duration / s.scan_period + 1e-9) + 1
         kp = f"sensors[{i}]"
@@ -689,9 +696,10 @@ def _check_work(
     total += n_truth * (n_targets + 1)
     if total > MAX_POINTS:
         raise r.error(
-            "duration_s",
-            f"{total:.3g} simulated samples in one run (truth and scans of {n_targets} "
-            f"target(s)); at most {MAX_POINTS}: shorten the scenario or lengthen the periods",
+            "multitarget" if born > n_scripted else "duration_s",
+            f"{total:.3g} simulated samples in one run (truth and scans of {n_targets:.3g} "
+            f"target(s)); at most {MAX_POINTS}: shorten the scenario or lengthen the periods"
+            + (", or ask for fewer targets, births or crossings" if born else ""),
         )
 
 

@@ -95,7 +95,6 @@ _TIME_FORMATS = (
     "%d/%m/%Y %H:%M:%S",
     "%Y-%m-%d %H:%M:%S",
 )
-_COMPRESSION = {".gz": "gzip", ".gzip": "gzip", ".zst": "zstd", ".zstd": "zstd", ".bz2": "bz2"}
 
 
 class NotColumnar(Exception):
@@ -121,15 +120,13 @@ def detect_schema(header: Sequence[str]) -> str:
     )
 
 
-def open_input(path: Path) -> Any:
-    """A pyarrow input stream of ``path``, decompressed by its suffix (.gz, .zst, .bz2)."""
-    import pyarrow as pa
+def open_input(path: Path, whole: bool = False) -> Any:
+    """A binary stream of ``path``, decompressed when it holds gzip, zstd or bzip2 data
+    (by its magic bytes, whatever its suffix), in bounded chunks
+    (:func:`seatrack.io.compressed.open_input`)."""
+    from seatrack.io.compressed import open_input as open_bounded
 
-    comp = _COMPRESSION.get(path.suffix.lower())
-    try:
-        return pa.input_stream(str(path), compression=comp)
-    except OSError as exc:
-        raise InputError(f"{path}: cannot read ({exc})") from None
+    return open_bounded(path, whole)
 
 
 def is_parquet(path: Path) -> bool:

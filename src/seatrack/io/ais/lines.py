@@ -161,7 +161,7 @@ def _reject_part(source: str, rejects: list[tuple[int, str]]) -> AisReports:
 
 def read_lines(path: Path) -> AisReports:
     """Read a whole (maybe compressed) file line by line (see the module docstring)."""
-    with open_input(path) as stream:
+    with open_input(path, whole=True) as stream:
         data = stream.read()
     if not data.strip():
         raise InputError(f"{path}: file is empty")

@@ -145,9 +145,13 @@ def nmea_rows(items: list[tuple[int, bytes]]) -> tuple[list[NmeaRow], dict[str, 
         if mtype not in POSITION_TYPES:
             skip(f"not a position report (type {mtype})")
             return
-        lat, lon = float(msg.lat), float(msg.lon)
-        sog, cog = float(msg.speed), float(msg.course)
-        hdg = float(getattr(msg, "heading", float("nan")))
+        try:  # a payload too short for its type decodes with None fields
+            lat, lon = float(msg.lat), float(msg.lon)
+            sog, cog = float(msg.speed), float(msg.course)
+            hdg = float(getattr(msg, "heading", float("nan")))
+        except (TypeError, ValueError, AttributeError):
+            reject(line, t, "undecodable message")
+            return
         if mtype == 27:  # 6-bit knots (63 = n/a), 9-bit degrees (511 = n/a)
             sog = float("nan") if sog >= 63 else sog
         rows.append((line, int(msg.mmsi), t, lat, lon, sog, cog, hdg, ""))

@@ -1,0 +1,354 @@
+"""The fused picture: radar plots and AIS reports in, three tables out (docs/fusion.md).
+
+1. The plots go through the multi-target tracker of the radar's ``radar.toml``
+   (:mod:`seatrack.io.multitarget`), in the radar's East-North plane.
+2. The AIS reports are brought to the same plane (:meth:`Coverage.to_local`), shared MMSIs
+   split and jumps removed (:mod:`~seatrack.fusion.anomalies`), and every vessel tracked
+   by the project's AIS tracker (:func:`seatrack.filters.ais.track_reports`, forward
+   filter only, so that each state uses the reports up to its time).
+3. At every radar scan :class:`Fusion` predicts the AIS vessels, associates them with the
+   radar tracks (:mod:`~seatrack.fusion.associate`) and classes both sides:
+
+   * a radar track with an AIS vessel is ``ais``; one inside coverage that has had none
+     for ``dark_delay_s`` is ``dark``; otherwise (outside coverage, or waiting) ``unknown``;
+   * an AIS vessel inside coverage by at least ``edge_margin_m`` (where the detection
+     probability is at least ``min_detection_probability``) that has had no radar track
+     for ``not_seen_delay_s`` is ``not_seen``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass
+from dataclasses import fields
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seatrack.config import ConfigError
+from seatrack.config import load_toml
+from seatrack.config import parse_config
+from seatrack.filters.ais import AisTrackerConfig
+from seatrack.filters.ais import track_reports
+from seatrack.filters.ais.kernel import OutlierKind
+from seatrack.filters.ais.tracks import AisTracks
+from seatrack.filters.base import Plots
+from seatrack.filters.base import SensorNoise
+from seatrack.fusion.anomalies import gap_limits
+from seatrack.fusion.anomalies import reporting_gaps
+from seatrack.fusion.anomalies import split_identities
+from seatrack.fusion.associate import AisStates
+from seatrack.fusion.associate import Associator
+from seatrack.fusion.associate import FusionConfig
+from seatrack.fusion.associate import predict_ais
+from seatrack.fusion.associate import velocity_covariance
+from seatrack.fusion.coverage import Coverage
+from seatrack.geometry import cart_to_polar
+from seatrack.geometry import enu_to_geodetic
+from seatrack.geometry import rotation_to_beam
+from seatrack.geometry import velocity_from_course
+from seatrack.io.ais.reports import AisReports
+from seatrack.io.multitarget import make_filter
+from seatrack.io.radar import RadarSetup
+from seatrack.io.radar import parse_radar_config
+from seatrack.tracking import MultiTargetTracker
+from seatrack.tracking import TrackStatus
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+__all__ = [
+    "AisSide",
+    "Fusion",
+    "Picture",
+    "RadarTracks",
+    "ScanResult",
+    "prepare_ais",
+    "radar_tracks",
+    "track_covariance",
+    "fuse_picture",
+    "CLASSES",
+    "parse_fusion_config",
+    "load_fusion_config",
+]
+
+#: radar track classes (the ``class`` column)
+CLASSES = ("unknown", "ais", "dark")
+
+
+@dataclass(frozen=True)
+class RadarTracks:
+    """Radar track rows (one per track and scan) sorted by time: ``track`` id, ``t`` (s),
+    ``status`` label, ``pos`` (n, 2) m and ``cov`` (n, 2, 2) m^2 in the radar's plane."""
+
+    track: IntArray
+    t: FloatArray
+    status: NDArray[np.str_]
+    pos: FloatArray
+    cov: FloatArray
+
+
+def radar_tracks(plots: Plots, setup: RadarSetup, source: str = "radar config") -> RadarTracks:
+    """The confirmed and coasting tracks of the multi-target tracker over ``plots`` (the
+    radar at the origin of their plane), configured by ``setup``."""
+    flt, _ = make_filter(setup.site.method, setup.method_table, plots, source, setup.tracker)
+    run = MultiTargetTracker(flt.filter, setup.sensor, setup.tracker).run(flt.prepare(plots))
+    labels = np.array([s.label for s in TrackStatus])
+    n = run.t.size
+    c = run.columns
+    pos = np.stack([c["x_m"], c["y_m"]], -1) if n else np.zeros((0, 2))
+    cov = np.zeros((n, 2, 2))
+    if n:
+        cov = track_covariance(pos, c["std_x_m"], c["std_y_m"], setup.sensor)
+    order = np.argsort(run.t, kind="stable")
+    return RadarTracks(run.track[order].astype(np.int64), run.t[order],
+                       labels[run.status][order], pos[order], cov[order])  # fmt: skip
+
+
+def track_covariance(
+    pos: FloatArray, std_x: FloatArray, std_y: FloatArray, sensor: SensorNoise
+) -> FloatArray:
+    """Position covariance (n, 2, 2) of radar tracks from their East and North standard
+    deviations (the tracker's output has no cross term).
+
+    A radar track's error ellipse is aligned with its line of sight, as that of its plots
+    (``R = B diag(s_r^2, (r s_az)^2) B^T``, ``B`` the rotation to the beam): the covariance
+    is taken as ``k R`` with ``k`` matching the trace, ``k = (std_x^2 + std_y^2) / tr R``.
+    At 30 km with 0.3 deg of azimuth noise the cross-range axis is eight times the range
+    axis; a diagonal covariance would miss that tilt by up to a factor of four in variance.
+    """
+    r, az = cart_to_polar(pos)
+    r = np.maximum(np.atleast_1d(r), 1.0)
+    b = rotation_to_beam(np.atleast_1d(az))
+    lam = np.stack([np.full(r.shape, sensor.sigma_range**2), (r * sensor.sigma_azimuth) ** 2], -1)
+    rr = np.einsum("nki,nk,nkj->nij", b, lam, b)
+    k = (np.square(std_x) + np.square(std_y)) / (lam[:, 0] + lam[:, 1])
+    return np.asarray(rr * k[:, None, None])
+
+
+@dataclass(frozen=True)
+class AisSide:
+    """The AIS reports prepared for fusion, one entry per valid report (``rows`` index the
+    input reports) plus the tracked states (:class:`AisStates`) and per-vessel names."""
+
+    rows: IntArray
+    vessel: IntArray
+    gap: NDArray[np.bool_]
+    jump: NDArray[np.bool_]
+    conflict: NDArray[np.bool_]
+    states: AisStates
+    vessel_mmsi: IntArray
+    vessel_name: NDArray[np.str_]
+
+
+def prepare_ais(reports: AisReports, coverage: Coverage, cfg: FusionConfig) -> AisSide:
+    """Split, flag and track the valid AIS reports (module docstring, step 2)."""
+    rows = np.flatnonzero(reports.valid)
+    r = reports.take(rows)
+    xy = coverage.to_local(r.lat, r.lon)
+    split = split_identities(r.mmsi, r.t, xy, r.sog_kn, r.cog_deg)
+    use = split.vessel >= 0
+    kept = np.flatnonzero(use)
+    sub = r.take(kept)
+    sub.mmsi = split.vessel[kept]  # each trajectory its own vessel
+    # the forward filter (no smoother): a state uses only the reports up to its own
+    tr = _scatter(track_reports(sub, AisTrackerConfig(smooth=False)), kept, r.t.size)
+    bad = np.isin(
+        tr.outlier_kind, [OutlierKind.IMPLAUSIBLE_JUMP, OutlierKind.IMPLAUSIBLE_AFTER_GAP]
+    )
+    jump = split.jump | (use & bad)
+    n_v = split.vessel_mmsi.size
+    limit = gap_limits(split.vessel[use], r.t[use], n_v, cfg.gap_factor, cfg.min_gap)
+    gap = reporting_gaps(np.where(use, split.vessel, -1), r.t, limit)
+    ok = use & ~tr.outlier & np.isfinite(tr.lat) & np.isfinite(tr.speed) & np.isfinite(tr.course)
+    k = np.flatnonzero(ok)
+    k = k[np.lexsort((r.t[k], split.vessel[k]))]
+    pos = coverage.to_local(tr.lat[k], tr.lon[k])
+    pos_cov = np.zeros((k.size, 2, 2))
+    pos_cov[:, 0, 0], pos_cov[:, 1, 1] = tr.std_x_m[k] ** 2, tr.std_y_m[k] ** 2
+    vel = velocity_from_course(tr.course[k], tr.speed[k])
+    vel_cov = velocity_covariance(tr.course[k], tr.speed[k], np.nan_to_num(tr.std_course[k]) ** 2,
+                                  np.nan_to_num(tr.std_speed[k]) ** 2)  # fmt: skip
+    states = AisStates(split.vessel[k], r.t[k], pos, vel, pos_cov, vel_cov, limit)
+    names = np.array(
+        [
+            str(m) if s == 0 else f"{m}#{s + 1}"
+            for m, s in zip(split.vessel_mmsi, split.vessel_sub, strict=True)
+        ],
+        dtype=str,
+    )
+    return AisSide(rows, split.vessel, gap, jump, split.conflict, states, split.vessel_mmsi,
+                   names if names.size else np.zeros(0, str))  # fmt: skip
+
+
+def _scatter(tr: AisTracks, rows: IntArray, n: int) -> AisTracks:
+    """``tr`` of the reports ``rows`` spread over ``n`` reports (NaN / 0 elsewhere)."""
+    out = {}
+    for f in fields(tr):
+        a = getattr(tr, f.name)
+        full = np.zeros(n, a.dtype) if a.dtype.kind in "bi" else np.full(n, np.nan)
+        full[rows] = a
+        out[f.name] = full
+    return AisTracks(**out)
+
+
+@dataclass(frozen=True)
+class ScanResult:
+    """One scan of :meth:`Fusion.step`. Radar rows: ``ais_vessel`` (-1: none),
+    ``identity_prob``, ``klass`` (index into :data:`CLASSES`), ``covered``. AIS rows (the
+    vessels predicted at this time): ``vessel``, ``pos``, ``covered``, ``radar_row``
+    (-1: none), ``not_seen``."""
+
+    ais_vessel: IntArray
+    identity_prob: FloatArray
+    klass: NDArray[np.int8]
+    covered: NDArray[np.bool_]
+    vessel: IntArray
+    pos: FloatArray
+    vessel_covered: NDArray[np.bool_]
+    radar_row: IntArray
+    not_seen: NDArray[np.bool_]
+
+
+class Fusion:
+    """The per-scan fusion step (module docstring, step 3); state: the pair scores and
+    the clocks of the classes."""
+
+    def __init__(self, coverage: Coverage, states: AisStates, config: FusionConfig) -> None:
+        self.coverage = coverage
+        self.states = states
+        self.config = config
+        self.assoc = Associator(config)
+        n = states.n_vessels
+        self._vessel_clock = np.full(n, np.nan)  # last time seen, or entered coverage
+        self._track_clock = np.zeros(0)  # per radar track id: last time with an AIS vessel
+        self._detect_ok = coverage.site.detection_probability >= config.min_detection_probability
+
+    def step(self, t: float, track: IntArray, pos: FloatArray, cov: FloatArray) -> ScanResult:
+        """Fuse the radar tracks of the scan at ``t`` (ids, positions (n, 2), covariances)."""
+        cfg = self.config
+        pred = predict_ais(self.states, t, cfg)
+        a = self.assoc.step(track, pos, cov, pred.vessel, pred.pos, pred.cov)
+        has = a.ais_row >= 0
+        if track.size and int(track.max()) >= self._track_clock.size:
+            grow = np.full(int(track.max()) + 1 - self._track_clock.size, np.nan)
+            self._track_clock = np.r_[self._track_clock, grow]
+        clock = self._track_clock
+        new = np.isnan(clock[track])
+        clock[track[new | has]] = t
+        covered = self.coverage.covered(pos[:, 0], pos[:, 1])
+        dark = ~has & covered & (t - clock[track] >= cfg.dark_delay)
+        klass = np.where(has, 1, np.where(dark, 2, 0)).astype(np.int8)
+        vessel_of = np.where(has, pred.vessel[np.maximum(a.ais_row, 0)], -1)
+
+        m = pred.vessel.size
+        radar_row = np.full(m, -1, np.int64)
+        radar_row[a.ais_row[has]] = np.flatnonzero(has)
+        v_cov = self.coverage.covered(pred.pos[:, 0], pred.pos[:, 1], cfg.edge_margin)
+        v_cov &= self._detect_ok
+        vclock = self._vessel_clock
+        was_active = np.zeros(self.states.n_vessels, bool)
+        was_active[np.flatnonzero(np.isfinite(vclock))] = True
+        restart = ~was_active[pred.vessel] | (radar_row >= 0) | ~v_cov
+        active = np.zeros(self.states.n_vessels, bool)
+        active[pred.vessel] = True
+        vclock[~active] = np.nan
+        vclock[pred.vessel[restart]] = t
+        not_seen = v_cov & (radar_row < 0) & (t - vclock[pred.vessel] >= cfg.not_seen_delay)
+        return ScanResult(vessel_of, a.identity_prob, klass, covered, pred.vessel, pred.pos,
+                          v_cov, radar_row, not_seen)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Picture:
+    """Everything :func:`fuse_picture` found (arrays; :mod:`seatrack.api.fuse` makes the
+    tables). Radar rows follow :class:`RadarTracks`; AIS vessel rows are one per vessel
+    and scan while the vessel is predicted; report flags follow :class:`AisSide`."""
+
+    radar: RadarTracks
+    radar_vessel: IntArray
+    identity_prob: FloatArray
+    klass: NDArray[np.int8]
+    radar_covered: NDArray[np.bool_]
+    ais: AisSide
+    reports: AisReports
+    v_time: FloatArray
+    v_vessel: IntArray
+    v_pos: FloatArray
+    v_covered: NDArray[np.bool_]
+    v_track: IntArray
+    v_not_seen: NDArray[np.bool_]
+    origin_deg: tuple[float, float]
+    seconds_per_scan: FloatArray
+
+    def geodetic(self, pos: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(lat, lon) degrees of positions (n, 2) in the radar's plane."""
+        if pos.shape[0] == 0:
+            return np.zeros(0), np.zeros(0)
+        lat, lon, _ = enu_to_geodetic(pos, *self.origin_deg)
+        return lat, lon
+
+
+def fuse_picture(reports: AisReports, plots: Plots, setup: RadarSetup,
+                 config: FusionConfig | None = None, source: str = "radar config",
+                 coverage: Coverage | None = None) -> Picture:  # fmt: skip
+    """Track the plots, prepare the AIS reports and fuse them scan by scan."""
+    import time
+
+    cfg = config or FusionConfig()
+    cov = coverage or Coverage.of(setup.site, cfg.land_mask, cfg.land_cell)
+    radar = radar_tracks(plots, setup, source)
+    ais = prepare_ais(reports, cov, cfg)
+    fusion = Fusion(cov, ais.states, cfg)
+    n = radar.t.size
+    r_vessel = np.full(n, -1, np.int64)
+    prob = np.full(n, np.nan)
+    klass = np.zeros(n, np.int8)
+    r_cov = np.zeros(n, bool)
+    parts: list[tuple[NDArray[Any], ...]] = []
+    scan_times = np.unique(plots.t)
+    bounds = np.searchsorted(radar.t, scan_times), np.searchsorted(radar.t, scan_times, "right")
+    seconds = np.zeros(scan_times.size)
+    empty = np.zeros(0, np.int64)
+    for s, (t, a, b) in enumerate(zip(scan_times, *bounds, strict=True)):
+        tic = time.perf_counter()
+        sl = slice(int(a), int(b))
+        res = fusion.step(float(t), radar.track[sl] if b > a else empty, radar.pos[sl],
+                          radar.cov[sl])  # fmt: skip
+        seconds[s] = time.perf_counter() - tic
+        r_vessel[sl], prob[sl], klass[sl], r_cov[sl] = (res.ais_vessel, res.identity_prob,
+                                                       res.klass, res.covered)  # fmt: skip
+        trk = np.where(res.radar_row >= 0, radar.track[sl][np.maximum(res.radar_row, 0)]
+                       if b > a else -1, -1)  # fmt: skip
+        parts.append((np.full(res.vessel.size, t), res.vessel, res.pos, res.vessel_covered,
+                      trk, res.not_seen))  # fmt: skip
+    cat = (
+        [np.concatenate(c) if c else np.zeros(0) for c in zip(*parts, strict=True)]
+        if parts
+        else [np.zeros(0), empty, np.zeros((0, 2)), np.zeros(0, bool), empty, np.zeros(0, bool)]
+    )
+    origin = (math.degrees(setup.site.lat), math.degrees(setup.site.lon))
+    return Picture(radar, r_vessel, prob, klass, r_cov, ais, reports, cat[0],
+                   cat[1].astype(np.int64), cat[2].reshape(-1, 2), cat[3].astype(bool),
+                   cat[4].astype(np.int64), cat[5].astype(bool), origin, seconds)  # fmt: skip
+
+
+def parse_fusion_config(
+    table: Mapping[str, Any], source: str = "radar config"
+) -> tuple[RadarSetup, FusionConfig]:
+    """The radar (:func:`seatrack.io.radar.parse_radar_config`) and its ``[fusion]``
+    table (:class:`FusionConfig`) from one parsed ``radar.toml``."""
+    rest = dict(table)
+    tab = rest.pop("fusion", {})
+    if not isinstance(tab, Mapping):
+        raise ConfigError(f"{source}: [fusion] must be a table")
+    setup = parse_radar_config(rest, source)
+    return setup, parse_config(FusionConfig, tab, source=f"{source}: fusion")
+
+
+def load_fusion_config(path: str | Path) -> tuple[RadarSetup, FusionConfig]:
+    """:func:`parse_fusion_config` of a ``radar.toml`` file (errors name the file and key)."""
+    return parse_fusion_config(load_toml(path), source=str(path))

@@ -119,3 +119,28 @@ def test_checked_runs_the_bounds_and_then_the_subclass_check():
         Limits(high=math.nan)
     with pytest.raises(ValueError, match="must not exceed"):
         Limits(low=0.5, high=0.1)
+
+
+def test_every_param_config_of_the_package_is_checked():
+    """Each dataclass of seatrack with :func:`param` fields derives from Checked (found
+    by the modules' text, so that a new config class is covered without a list)."""
+    import importlib
+    import inspect
+    from pathlib import Path
+
+    import seatrack
+
+    src = Path(seatrack.__file__).parent
+    found = []
+    for path in sorted(src.rglob("*.py")):
+        if "= param(" not in path.read_text(encoding="utf-8") or path.name == "config.py":
+            continue
+        rel = path.relative_to(src.parent).with_suffix("")
+        module = importlib.import_module(".".join(rel.parts).removesuffix(".__init__"))
+        for _, cls in inspect.getmembers(module, inspect.isclass):
+            if cls.__module__ != module.__name__ or not dataclasses.is_dataclass(cls):
+                continue
+            if any("factor" in f.metadata for f in dataclasses.fields(cls)):
+                found.append(cls)
+                assert issubclass(cls, Checked), cls
+    assert len(found) >= 20

@@ -91,3 +91,10 @@ def test_prediction_moves_the_last_state_and_stops_after_the_limit() -> None:
     assert predict_ais(st, 45.0, cfg).vessel.tolist() == [1]  # vessel 0 silent > 30 s
     with pytest.raises(ValueError, match="sorted"):
         AisStates(st.vessel[::-1].copy(), st.t, st.pos, st.vel, st.pos_cov, st.vel_cov, st.limit)
+
+
+def test_config_built_directly_checks_its_keys():
+    with pytest.raises(ValueError, match=r"FusionConfig\.sigma_latency \(sigma_latency_s\)"):
+        FusionConfig(sigma_latency=-1.0)
+    with pytest.raises(ValueError, match=r"FusionConfig\.gate: must be >= 1"):
+        FusionConfig(gate=0.5)

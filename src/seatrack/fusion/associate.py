@@ -44,6 +44,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
+from seatrack.config import Checked
 from seatrack.config import param
 
 FloatArray = NDArray[np.float64]
@@ -65,7 +66,7 @@ _TWO_PI = 2.0 * math.pi
 
 
 @dataclass(frozen=True)
-class FusionConfig:
+class FusionConfig(Checked):
     """Keys of the ``[fusion]`` table of ``radar.toml`` (docs/fusion.md)."""
 
     gate: float = param(

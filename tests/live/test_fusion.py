@@ -1,0 +1,114 @@
+"""Radar-AIS fusion inside the live process, over loopback UDP: the scene of
+``tests/fusion_samples.py`` (two AIS-carrying vessels, one dark) replayed into a live
+process classes the radar tracks, and the classes at the last scan equal ``seatrack fuse``
+on the same AIS and plot files."""
+
+from __future__ import annotations
+
+import asyncio
+
+import numpy as np
+import pytest
+
+from fusion_samples import write_scene
+from live.streams import started
+from live.streams import udp_send
+from live.streams import wait_for
+from seatrack.fusion.picture import CLASSES
+from seatrack.fusion.picture import fuse_picture
+from seatrack.fusion.picture import load_fusion_config
+from seatrack.io.ais import read_ais
+from seatrack.io.multitarget import read_unlabelled_plots
+from seatrack.live.nmea import encode_report
+from seatrack.live.process import LiveOptions
+from seatrack.live.sources import Source
+
+UDP = Source("udp", "127.0.0.1", 0)
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    """The scene's files, its AIS reports as NMEA (``ais.nmea``) and the live run."""
+    d = tmp_path_factory.mktemp("scene")
+    ais_csv, plots_csv, toml = write_scene(d)
+    rep = read_ais([ais_csv])
+    lines = []
+    for m, t, la, lo, sog, cog in zip(rep.mmsi, rep.t, rep.lat, rep.lon, rep.sog_kn,
+                                      rep.cog_deg, strict=True):  # fmt: skip
+        lines += encode_report(int(m), float(t), float(la), float(lo), float(sog), float(cog))
+    nmea = d / "ais.nmea"
+    nmea.write_bytes(b"\n".join(lines) + b"\n")
+    setup, cfg = load_fusion_config(toml)
+    text = plots_csv.read_text().splitlines()
+    header, rows = text[0], text[1:]
+    times = [r.split(",", 1)[0] for r in rows]
+    scans: dict[str, list[str]] = {}
+    for t, r in zip(times, rows, strict=True):
+        scans.setdefault(t, []).append(r)
+    datagrams = [("\n".join([header, *rs]) + "\n").encode() for rs in scans.values()]
+
+    async def go():
+        proc = await started(LiveOptions(ais=[UDP], plots=[UDP], radar=setup, fusion=cfg,
+                                         http=None))  # fmt: skip
+        ais_port, plot_port = proc.udp_ports
+        for k in range(0, len(lines), 20):  # all AIS first: every state is there at each scan
+            udp_send(ais_port, [b"\n".join(lines[k : k + 20])])
+            await asyncio.sleep(0.001)
+        await wait_for(lambda: proc.counters.received == len(lines))
+        for k in range(0, len(datagrams), 10):
+            udp_send(plot_port, datagrams[k : k + 10])
+            await asyncio.sleep(0.001)
+        await wait_for(lambda: proc.counters.scans >= len(datagrams) - 1)
+        await proc.drain()
+        feats = proc.picture.collection()["features"]
+        health = proc.health()
+        await proc.stop()
+        return proc, feats, health
+
+    proc, feats, health = asyncio.run(asyncio.wait_for(go(), 20.0))
+    return {"proc": proc, "feats": feats, "health": health, "nmea": nmea, "plots": plots_csv,
+            "setup": setup, "cfg": cfg, "rep": rep, "scans": len(datagrams)}  # fmt: skip
+
+
+def test_live_fusion_classes_ais_and_dark_vessels(scene):
+    proc, feats = scene["proc"], scene["feats"]
+    assert proc.counters.scans == scene["scans"] and proc.counters.check()
+    radar = [f["properties"] for f in feats if f["properties"]["source"] == "radar"]
+    ais = [f["properties"] for f in feats if f["properties"]["source"] == "ais"]
+    mmsis = sorted({int(m) for m in scene["rep"].mmsi})
+    assert len(mmsis) == 2 and len(ais) == 2
+    # the three vessels' radar tracks (the scene has clutter-free tracks but coasting ones)
+    by_class = {}
+    for p in radar:
+        by_class.setdefault(p["class"], []).append(p)
+    assert sorted(p["mmsi"] for p in by_class["ais"]) == mmsis
+    assert all(p["identity_prob"] > 0.9 for p in by_class["ais"])
+    assert len(by_class["dark"]) == 1 and by_class["dark"][0]["mmsi"] is None
+    assert by_class["dark"][0]["identity_prob"] is None
+    assert all(p["not_seen"] is False for p in ais)
+    h = scene["health"]
+    assert h["dark"] == 1 and h["not_seen"] == 0 and h["radar_tracks"] == len(radar)
+
+
+def test_live_fusion_equals_batch_fuse_at_the_last_scan(scene):
+    """Per radar track at the last scan: the same class, MMSI and (to 1e-9) identity
+    probability as ``fuse_picture`` on the files of the same messages and plots."""
+    pic = fuse_picture(read_ais([scene["nmea"]]), read_unlabelled_plots(scene["plots"]),
+                       scene["setup"], scene["cfg"])  # fmt: skip
+    last = pic.radar.t == pic.radar.t.max()
+    names = pic.ais.vessel_mmsi
+    want = {
+        int(tid): (CLASSES[int(k)], int(names[v]) if v >= 0 else None)
+        for tid, k, v in zip(
+            pic.radar.track[last], pic.klass[last], pic.radar_vessel[last], strict=True
+        )  # fmt: skip
+    }
+    got = {tid: (f.klass, f.mmsi) for tid, f in scene["proc"].fusion.tracks.items()}
+    assert got == want
+    assert {c for c, _ in want.values()} == {"ais", "dark"}
+    prob = dict(zip(pic.radar.track[last].tolist(), pic.identity_prob[last], strict=True))
+    for tid, f in scene["proc"].fusion.tracks.items():
+        if f.identity_prob is None:
+            assert np.isnan(prob[tid])
+        else:
+            np.testing.assert_allclose(f.identity_prob, prob[tid], rtol=0, atol=1e-9)

@@ -1,12 +1,14 @@
 """Radar-AIS fusion inside the live process, over loopback UDP: the scene of
 ``tests/fusion_samples.py`` (two AIS-carrying vessels, one dark) replayed into a live
-process classes the radar tracks, and the classes at the last scan equal ``seatrack fuse``
+process classes the radar tracks (read from ``/api/tracks`` and ``/api/health``), and the
+classes at the last scan equal ``seatrack fuse``
 on the same AIS and plot files."""
 
 from __future__ import annotations
 
 import asyncio
 
+import aiohttp
 import numpy as np
 import pytest
 
@@ -22,6 +24,7 @@ from seatrack.io.multitarget import read_unlabelled_plots
 from seatrack.live.nmea import encode_report
 from seatrack.live.process import LiveOptions
 from seatrack.live.sources import Source
+from seatrack.live.web import start_web
 
 UDP = Source("udp", "127.0.0.1", 0)
 
@@ -48,8 +51,9 @@ def scene(tmp_path_factory):
     datagrams = [("\n".join([header, *rs]) + "\n").encode() for rs in scans.values()]
 
     async def go():
-        proc = await started(LiveOptions(ais=[UDP], plots=[UDP], radar=setup, fusion=cfg,
-                                         http=None))  # fmt: skip
+        proc = await started(LiveOptions(ais=[UDP], plots=[UDP], radar=setup, fusion=cfg))
+        runner = await start_web(proc, "127.0.0.1", 0)
+        url = f"http://127.0.0.1:{proc.http_port}"
         ais_port, plot_port = proc.udp_ports
         for k in range(0, len(lines), 20):  # all AIS first: every state is there at each scan
             udp_send(ais_port, [b"\n".join(lines[k : k + 20])])
@@ -60,8 +64,10 @@ def scene(tmp_path_factory):
             await asyncio.sleep(0.001)
         await wait_for(lambda: proc.counters.scans >= len(datagrams) - 1)
         await proc.drain()
-        feats = proc.picture.collection()["features"]
-        health = proc.health()
+        async with aiohttp.ClientSession() as s:
+            feats = (await (await s.get(url + "/api/tracks")).json())["features"]
+            health = await (await s.get(url + "/api/health")).json()
+        await runner.cleanup()
         await proc.stop()
         return proc, feats, health
 

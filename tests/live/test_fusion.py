@@ -19,8 +19,11 @@ from live.streams import wait_for
 from seatrack.fusion.picture import CLASSES
 from seatrack.fusion.picture import fuse_picture
 from seatrack.fusion.picture import load_fusion_config
+from seatrack.fusion.picture import parse_fusion_config
 from seatrack.io.ais import read_ais
 from seatrack.io.multitarget import read_unlabelled_plots
+from seatrack.live.ais import LiveAis
+from seatrack.live.fusion import LiveFusion
 from seatrack.live.nmea import encode_report
 from seatrack.live.process import LiveOptions
 from seatrack.live.sources import Source
@@ -118,3 +121,33 @@ def test_live_fusion_equals_batch_fuse_at_the_last_scan(scene):
             assert np.isnan(prob[tid])
         else:
             np.testing.assert_allclose(f.identity_prob, prob[tid], rtol=0, atol=1e-9)
+
+
+def test_a_vessel_rerun_replaces_its_later_states():
+    """An out-of-order report re-runs its vessel: the fusion keeps one state per report
+    time, the re-run ones replacing those it had; a scan drops the states it no longer
+    needs."""
+    setup, cfg = parse_fusion_config(
+        {"lat_deg": 56.0, "lon_deg": 7.0, "fusion": {"land_mask": False}}
+    )
+    fusion = LiveFusion(setup, cfg)
+    ais = LiveAis(window_s=30.0)
+    ais.emitted = []
+    t0, lat, lon = 1.7e9, 56.0, 7.0
+    step = 10 * 5.0 * 0.514444 / (111_320.0 * np.cos(np.radians(lat)))  # 5 kn East, 10 s
+    for k in (0, 1, 2, 4):
+        ais.add(np.array([219000001]), np.array([t0 + 10 * k]), np.array([lat]),
+                np.array([lon + k * step]), np.array([5.0]), np.array([90.0]))  # fmt: skip
+    fusion.add_estimates(ais.emitted)
+    before = dict(fusion.rows[0])
+    ais.emitted.clear()
+    ais.add(np.array([219000001]), np.array([t0 + 30]), np.array([lat]),
+            np.array([lon + 3 * step]), np.array([5.0]), np.array([90.0]))  # fmt: skip
+    assert [e.t for _, e in ais.emitted] == [t0 + 30, t0 + 40]  # the re-run
+    fusion.add_estimates(ais.emitted)
+    assert sorted(fusion.rows[0]) == [t0 + 10 * k for k in range(5)]
+    assert fusion.times[0] == [t0 + 10 * k for k in range(5)]
+    assert all(fusion.rows[0][t] == before[t] for t in (t0, t0 + 10, t0 + 20))
+    assert fusion.rows[0][t0 + 40] != before[t0 + 40]  # re-run with the report at 30 s
+    fusion.scan(t0 + 35, np.zeros(0, np.int64), None, {})
+    assert sorted(fusion.rows[0]) == [t0 + 30, t0 + 40]  # older states are not needed

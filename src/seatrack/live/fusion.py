@@ -42,6 +42,7 @@ __all__ = ["LiveFusion", "FusedTrack", "HISTORY"]
 
 #: report times kept per vessel for its gap limit
 HISTORY = 64
+_RAW = 13  # a stored raw filter output: lat0, lon0 (deg), state (5), std (5), segment
 
 
 class FusedTrack(NamedTuple):
@@ -72,6 +73,8 @@ class LiveFusion:
         self.mmsi: list[int] = []
         self.rows: list[dict[float, tuple[float, ...]]] = []  # per vessel: time -> state
         self.times: list[list[float]] = []  # per vessel: report times (for the gap limit)
+        self.limit: list[float] = []  # per vessel: gap limit (s)
+        self._stale: set[int] = set()  # vessels whose gap limit needs recomputing
         self.fusion = Fusion(self.coverage, self._states(), self.config)
         self.tracks: dict[int, FusedTrack] = {}  # radar track id -> result at the last scan
         self.not_seen: set[int] = set()  # MMSIs not seen at the last scan
@@ -80,55 +83,79 @@ class LiveFusion:
     def add_estimates(self, emitted: list) -> None:
         """``(vessel, Estimate)`` pairs of :attr:`LiveAis.emitted`, in emission order. A
         vessel re-run from an earlier report emits again from that report on: its states
-        from that time on are replaced."""
+        after that time are dropped (the re-run emits them again), one at the same time
+        replaced."""
         if not emitted:
             return
-        n = len(emitted)
-        t = np.array([e.t for _, e in emitted])
-        state = np.array([e.state for _, e in emitted]).reshape(n, 5)
-        std = np.array([e.std for _, e in emitted]).reshape(n, 5)
-        kind = np.array([e.kind for _, e in emitted], dtype=np.int8)
-        seg = np.array([e.segment for _, e in emitted], dtype=np.int64)
-        planes = ReportPlanes(n, np.arange(n), np.array([v.lat0 for v, _ in emitted]),
-                              np.array([v.lon0 for v, _ in emitted]))  # fmt: skip
-        st = TrackStates(state, std, kind > 0, kind, seg, np.full(n, np.nan), np.zeros(n))
-        tr = tracks_from_states(planes, st)
-        cols = np.stack([getattr(tr, f) for f in STATE_FIELDS], -1)
-        restarted: set[int] = set()
-        for k, (v, _) in enumerate(emitted):
+        # the filter's raw output is kept (outliers left out, as in the batch fusion); it is
+        # converted to WGS84 states at the scan (:meth:`_states`), off the ingest path
+        touched: set[int] = set()
+        for v, e in emitted:
             j = self.index.get(v.mmsi)
             if j is None:
                 j = self.index[v.mmsi] = len(self.mmsi)
                 self.mmsi.append(v.mmsi)
                 self.rows.append({})
                 self.times.append([])
-            tk = float(t[k])
-            if j not in restarted:  # the first emission of this batch: drop later states
-                restarted.add(j)
-                rows, times = self.rows[j], self.times[j]
-                for old in [s for s in rows if s >= tk]:
+                self.limit.append(self.config.min_gap)
+            tk = e.t
+            rows, times = self.rows[j], self.times[j]
+            if times and times[-1] > tk:  # the first report of a re-run: drop later states
+                for old in [s for s in rows if s > tk]:
                     del rows[old]
-                while times and times[-1] >= tk:
+                while times and times[-1] > tk:
                     times.pop()
-            self.times[j].append(tk)
-            del self.times[j][:-HISTORY]
-            # as the batch fusion: states of non-outlier reports with a position and velocity
-            if kind[k] == 0 and bool(np.isfinite(cols[k, [0, 1, 4, 5]]).all()):
-                self.rows[j][tk] = tuple(cols[k])
+            touched.add(j)
+            times.append(tk)
+            if len(times) > HISTORY:
+                del times[0]
+            if e.kind == 0:
+                rows[tk] = (v.lat0, v.lon0, *e.state.tolist(), *e.std.tolist(), e.segment)
+        self._stale.update(touched)
+
+    def _limits(self) -> FloatArray:
+        """Per vessel the longest silence before it is no longer predicted (s):
+        :func:`~seatrack.fusion.anomalies.gap_limits` of its report times seen (recomputed
+        for the vessels with new reports)."""
+        if self._stale:
+            js = sorted(self._stale)
+            sizes = [len(self.times[j]) for j in js]
+            owner = np.repeat(np.arange(len(js)), sizes)
+            times = np.fromiter((s for j in js for s in self.times[j]), float, sum(sizes))
+            new = gap_limits(owner, times, len(js), self.config.gap_factor, self.config.min_gap)
+            for j, lim in zip(js, new.tolist(), strict=True):
+                self.limit[j] = lim
+            self._stale.clear()
+        return np.array(self.limit, dtype=float)
+
+    def _convert(self) -> None:
+        """The filter's plane states stored since the last scan, in WGS84 (one vectorised
+        :func:`~seatrack.filters.ais.tracks.tracks_from_states`); NaN where unknown."""
+        new = [(r, s) for r in self.rows for s, v in r.items() if len(v) == _RAW]
+        if not new:
+            return
+        a = np.array([r[s] for r, s in new], float)
+        n = len(new)
+        kind = np.zeros(n, np.int8)
+        st = TrackStates(a[:, 2:7], a[:, 7:12], kind > 0, kind, a[:, 12].astype(np.int64),
+                         np.full(n, np.nan), np.zeros(n))  # fmt: skip
+        tr = tracks_from_states(ReportPlanes(n, np.arange(n), a[:, 0], a[:, 1]), st)
+        out = np.stack([getattr(tr, f) for f in STATE_FIELDS], -1).tolist()
+        for (r, s), v in zip(new, out, strict=True):
+            r[s] = tuple(v)
 
     def _states(self) -> Any:
-        """The stored states as :class:`AisStates` (sorted by vessel, then time)."""
-        vessel = [j for j, r in enumerate(self.rows) for _ in r]
-        t = [s for r in self.rows for s in sorted(r)]
-        vals = [r[s] for r in self.rows for s in sorted(r)]
-        a = np.array(vals, dtype=float).reshape(-1, len(STATE_FIELDS))
+        """The stored states as :class:`AisStates` (sorted by vessel, then time), those
+        with a position and velocity (as the batch fusion)."""
+        self._convert()
+        vessel = np.array([j for j, r in enumerate(self.rows) for _ in r], np.int64)
+        t = np.array([s for r in self.rows for s in sorted(r)], float)
+        a = np.array([r[s] for r in self.rows for s in sorted(r)], float)
+        a = a.reshape(-1, len(STATE_FIELDS))
         cols = {f: a[:, i] for i, f in enumerate(STATE_FIELDS)}
-        nv = len(self.rows)
-        tv = [(j, s) for j, ts in enumerate(self.times) for s in ts]
-        limit = gap_limits(np.array([j for j, _ in tv], np.int64), np.array([s for _, s in tv]),
-                           nv, self.config.gap_factor, self.config.min_gap)  # fmt: skip
-        return ais_states(self.coverage, np.array(vessel, np.int64), np.array(t, float), cols,
-                          limit)  # fmt: skip
+        ok = np.isfinite(cols["lat"]) & np.isfinite(cols["speed"]) & np.isfinite(cols["course"])
+        cols = {f: c[ok] for f, c in cols.items()}
+        return ais_states(self.coverage, vessel[ok], t[ok], cols, self._limits())
 
     def _prune(self, t: float) -> None:
         """Keep per vessel the last state at or before ``t`` and the later ones (scans

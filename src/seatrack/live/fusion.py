@@ -18,6 +18,7 @@ MMSIs are not split and jump reports are only those the filter rejects.
 
 from __future__ import annotations
 
+import time
 from typing import Any
 from typing import NamedTuple
 
@@ -35,6 +36,7 @@ from seatrack.fusion.picture import STATE_FIELDS
 from seatrack.fusion.picture import Fusion
 from seatrack.fusion.picture import ais_states
 from seatrack.fusion.picture import track_covariance
+from seatrack.live.counters import Latency
 
 FloatArray = NDArray[np.float64]
 
@@ -79,6 +81,7 @@ class LiveFusion:
         self.tracks: dict[int, FusedTrack] = {}  # radar track id -> result at the last scan
         self.not_seen: set[int] = set()  # MMSIs not seen at the last scan
         self.scan_t = -np.inf
+        self.latency = Latency(2_000)  # seconds per fusion step (``/api/health``)
 
     def add_estimates(self, emitted: list) -> None:
         """``(vessel, Estimate)`` pairs of :attr:`LiveAis.emitted`, in emission order. A
@@ -169,6 +172,7 @@ class LiveFusion:
         """One fusion step for the radar tracks reported at the scan ``t`` (a
         :attr:`LiveRadar.listeners` callback: ids, statuses, filter columns)."""
         del status
+        tic = time.perf_counter()
         self.fusion.set_states(self._states())
         ids = np.asarray(ids, np.int64)
         if ids.size:
@@ -190,6 +194,7 @@ class LiveFusion:
         self.not_seen = {self.mmsi[int(v)] for v in res.vessel[res.not_seen]}
         self.scan_t = float(t)
         self._prune(float(t))
+        self.latency.add(time.perf_counter() - tic)
 
     @property
     def n_dark(self) -> int:

@@ -265,6 +265,7 @@ class LiveProcess:
         if self.fusion is not None:
             h["dark"] = self.fusion.n_dark
             h["not_seen"] = len(self.fusion.not_seen)
+            h["fusion_ms"] = self.fusion.latency.percentiles_ms()
         h["pending_fragments"] = self.assembler.pending
         h["queue"] = self.queue.qsize()
         if self.store is not None:

@@ -97,6 +97,7 @@ def test_live_fusion_classes_ais_and_dark_vessels(scene):
     assert all(p["not_seen"] is False for p in ais)
     h = scene["health"]
     assert h["dark"] == 1 and h["not_seen"] == 0 and h["radar_tracks"] == len(radar)
+    assert h["fusion_ms"]["p99"] is not None
 
 
 def test_live_fusion_equals_batch_fuse_at_the_last_scan(scene):

@@ -42,7 +42,7 @@ FloatArray = NDArray[np.float64]
 
 __all__ = ["LiveFusion", "FusedTrack", "HISTORY"]
 
-#: report times kept per vessel for its gap limit
+#: report times and states kept per vessel (its gap limit; the states until a scan)
 HISTORY = 64
 _RAW = 13  # a stored raw filter output: lat0, lon0 (deg), state (5), std (5), segment
 
@@ -114,6 +114,8 @@ class LiveFusion:
                 del times[0]
             if e.kind == 0:
                 rows[tk] = (v.lat0, v.lon0, *e.state.tolist(), *e.std.tolist(), e.segment)
+                if len(rows) > HISTORY:  # bounded without scans: the oldest (in time order)
+                    del rows[next(iter(rows))]
         self._stale.update(touched)
 
     def _limits(self) -> FloatArray:

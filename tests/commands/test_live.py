@@ -39,3 +39,22 @@ def test_file_source_ends_with_the_counters(tmp_path):
     h = json.loads(run.stdout.splitlines()[-1])
     assert (h["received"], h["decoded"], h["vessels"]) == (6, 5, 1)
     assert h["rejected"] == {"truncated sentence": 1}
+
+
+def test_radar_toml_fusion_table_is_read_and_checked(tmp_path):
+    """``--config`` takes radar.toml's ``[fusion]`` table (bad keys: exit 2); with AIS and
+    radar inputs the health has the fusion's counts."""
+    from fusion_samples import write_scene
+
+    _, plots, toml = write_scene(tmp_path)
+    p = tmp_path / "ais.nmea"
+    p.write_bytes(encode_report(219000001, 1.7e9, 56.0, 7.0, 7.0, 90.0)[0] + b"\n")
+    run = seatrack("live", "--ais", p, "--plots", plots, "--config", toml)
+    assert run.returncode == 0, run.stderr
+    h = json.loads(run.stdout.splitlines()[-1])
+    assert h["plots"]["scans"] == 100 and h["radar_tracks"] == 3
+    assert 0 <= h["dark"] <= 3 and h["not_seen"] in (0, 1)  # present: the fusion ran
+    bad = tmp_path / "bad.toml"
+    bad.write_text(toml.read_text() + "bogus_s = 1.0\n")  # inside [fusion]
+    run = seatrack("live", "--ais", p, "--plots", plots, "--config", bad)
+    assert run.returncode == 2 and run.stderr.startswith("error: ") and "bogus_s" in run.stderr

@@ -10,7 +10,10 @@ import pytest
 
 from seatrack.config import ConfigError
 from seatrack.fusion import scenario as sc
+from seatrack.fusion.associate import AisStates
 from seatrack.fusion.coverage import Coverage
+from seatrack.fusion.picture import CLASSES
+from seatrack.fusion.picture import Fusion
 from seatrack.fusion.picture import Picture
 from seatrack.fusion.picture import fuse_picture
 from seatrack.fusion.picture import parse_fusion_config
@@ -129,3 +132,28 @@ def test_track_covariance_lies_along_the_line_of_sight() -> None:
     # small axis along the line of sight (bearing 45 deg), ratio (r s_az / s_r)^2
     assert abs(abs(v[:, 0] @ pos[0]) / 30000.0 - 1.0) < 1e-9
     assert w[1] / w[0] == pytest.approx((30000.0 * math.radians(0.3) / 20.0) ** 2)
+
+
+def test_step_without_ais_vessels_and_states_replaced() -> None:
+    """Radar tracks with no AIS vessel predicted: none, then dark after ``dark_delay_s``
+    inside coverage; :meth:`Fusion.set_states` adds vessels, never removes them."""
+    setup, cfg = parse_fusion_config({"lat_deg": 56.0, "lon_deg": 7.0, "max_range_m": 20000.0,
+                                      "fusion": {"dark_delay_s": 6.0}})  # fmt: skip
+    cov = Coverage.of(setup.site, land=False)
+    empty = AisStates(np.zeros(0, np.int64), np.zeros(0), np.zeros((0, 2)), np.zeros((0, 2)),
+                      np.zeros((0, 2, 2)), np.zeros((0, 2, 2)), np.zeros(0))  # fmt: skip
+    fusion = Fusion(cov, empty, cfg)
+    ids, pos = np.array([0, 3]), np.array([[1000.0, 0.0], [0.0, 30000.0]])  # in, out of range
+    tcov = np.tile(np.eye(2) * 100.0, (2, 1, 1))
+    first = fusion.step(T0, ids, pos, tcov)
+    later = fusion.step(T0 + 6.0, ids, pos, tcov)
+    assert first.ais_vessel.tolist() == [-1, -1] and first.klass.tolist() == [0, 0]
+    assert [CLASSES[k] for k in later.klass] == ["dark", "unknown"]
+    one = AisStates(np.array([0]), np.array([T0 + 6.0]), np.array([[1000.0, 0.0]]),
+                    np.zeros((1, 2)), np.eye(2)[None] * 25.0, np.eye(2)[None] * 0.01,
+                    np.array([60.0]))  # fmt: skip
+    fusion.set_states(one)
+    res = [fusion.step(T0 + 6.0 + k, ids, pos, tcov) for k in range(1, 4)][-1]
+    assert res.ais_vessel.tolist() == [0, -1] and CLASSES[res.klass[0]] == "ais"
+    with pytest.raises(ValueError, match="fewer vessels"):
+        fusion.set_states(empty)

@@ -115,19 +115,20 @@ def register(app: typer.Typer) -> None:
         option_in("--window", window, 0.0, 3600.0)
         if not ais and not plots:
             raise InputError("give at least one --ais or --plots source")
-        radar = None
+        radar = fusion = None
         if any(s.startswith("tcp://") for s in plots):
             raise InputError("--plots: udp://HOST:PORT or a file (plots do not come over TCP)")
         if plots:
             if config is None:
                 raise InputError("--plots needs --config radar.toml (the radar's position)")
-            from seatrack.io.radar import load_radar_config
+            from seatrack.fusion.picture import load_fusion_config
 
-            radar = load_radar_config(config)
+            radar, fusion = load_fusion_config(config)  # the radar and its [fusion] table
         opts = LiveOptions(
             ais=[parse_source(s, "--ais") for s in ais],
             plots=[parse_source(s, "--plots") for s in plots],
             radar=radar,
+            fusion=fusion,
             http=None if http is None else parse_hostport(http, "--http"),
             window_s=window,
             store=store,

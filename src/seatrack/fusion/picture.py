@@ -67,6 +67,8 @@ __all__ = [
     "RadarTracks",
     "ScanResult",
     "prepare_ais",
+    "ais_states",
+    "STATE_FIELDS",
     "radar_tracks",
     "track_covariance",
     "fuse_picture",
@@ -166,13 +168,8 @@ def prepare_ais(reports: AisReports, coverage: Coverage, cfg: FusionConfig) -> A
     ok = use & ~tr.outlier & np.isfinite(tr.lat) & np.isfinite(tr.speed) & np.isfinite(tr.course)
     k = np.flatnonzero(ok)
     k = k[np.lexsort((r.t[k], split.vessel[k]))]
-    pos = coverage.to_local(tr.lat[k], tr.lon[k])
-    pos_cov = np.zeros((k.size, 2, 2))
-    pos_cov[:, 0, 0], pos_cov[:, 1, 1] = tr.std_x_m[k] ** 2, tr.std_y_m[k] ** 2
-    vel = velocity_from_course(tr.course[k], tr.speed[k])
-    vel_cov = velocity_covariance(tr.course[k], tr.speed[k], np.nan_to_num(tr.std_course[k]) ** 2,
-                                  np.nan_to_num(tr.std_speed[k]) ** 2)  # fmt: skip
-    states = AisStates(split.vessel[k], r.t[k], pos, vel, pos_cov, vel_cov, limit)
+    cols = {f: getattr(tr, f)[k] for f in STATE_FIELDS}
+    states = ais_states(coverage, split.vessel[k], r.t[k], cols, limit)
     names = np.array(
         [
             str(m) if s == 0 else f"{m}#{s + 1}"
@@ -182,6 +179,30 @@ def prepare_ais(reports: AisReports, coverage: Coverage, cfg: FusionConfig) -> A
     )
     return AisSide(rows, split.vessel, gap, jump, split.conflict, states, split.vessel_mmsi,
                    names if names.size else np.zeros(0, str))  # fmt: skip
+
+
+#: the AIS tracker output columns :func:`ais_states` reads
+STATE_FIELDS = ("lat", "lon", "std_x_m", "std_y_m", "speed", "course", "std_speed", "std_course")
+
+
+def ais_states(coverage: Coverage, vessel: IntArray, t: FloatArray,
+               cols: Mapping[str, FloatArray], limit: FloatArray) -> AisStates:  # fmt: skip
+    """:class:`AisStates` of AIS tracker output rows, in the radar's plane of ``coverage``.
+
+    ``cols`` holds the :data:`STATE_FIELDS` columns of :class:`AisTracks` (WGS84 position
+    deg, speed m/s, true course rad and their sigmas) of vessels ``vessel`` at times ``t``
+    (s), sorted by vessel, then time; ``limit`` per vessel (s). The position covariance is
+    diagonal (East, North sigmas); the velocity covariance is
+    :func:`~seatrack.fusion.associate.velocity_covariance` (unknown sigmas taken as 0)."""
+    c = cols
+    n = t.size
+    pos = coverage.to_local(c["lat"], c["lon"]).reshape(n, 2)
+    pos_cov = np.zeros((n, 2, 2))
+    pos_cov[:, 0, 0], pos_cov[:, 1, 1] = c["std_x_m"] ** 2, c["std_y_m"] ** 2
+    vel = velocity_from_course(c["course"], c["speed"]).reshape(n, 2)
+    vel_cov = velocity_covariance(c["course"], c["speed"], np.nan_to_num(c["std_course"]) ** 2,
+                                  np.nan_to_num(c["std_speed"]) ** 2)  # fmt: skip
+    return AisStates(vessel, t, pos, vel, pos_cov, vel_cov, limit)
 
 
 def _scatter(tr: AisTracks, rows: IntArray, n: int) -> AisTracks:
@@ -227,6 +248,15 @@ class Fusion:
         self._track_clock = np.zeros(0)  # per radar track id: last time with an AIS vessel
         self._detect_ok = coverage.site.detection_probability >= config.min_detection_probability
 
+    def set_states(self, states: AisStates) -> None:
+        """Replace the AIS states (a live process: the vessels' current states); vessel
+        ids keep their meaning, new ids (up to ``states.n_vessels``) start with no clock."""
+        grow = states.n_vessels - self._vessel_clock.size
+        if grow < 0:
+            raise ValueError("Fusion.set_states: fewer vessels than before")
+        self._vessel_clock = np.r_[self._vessel_clock, np.full(grow, np.nan)]
+        self.states = states
+
     def step(self, t: float, track: IntArray, pos: FloatArray, cov: FloatArray) -> ScanResult:
         """Fuse the radar tracks of the scan at ``t`` (ids, positions (n, 2), covariances)."""
         cfg = self.config
@@ -242,7 +272,8 @@ class Fusion:
         covered = self.coverage.covered(pos[:, 0], pos[:, 1])
         dark = ~has & covered & (t - clock[track] >= cfg.dark_delay)
         klass = np.where(has, 1, np.where(dark, 2, 0)).astype(np.int8)
-        vessel_of = np.where(has, pred.vessel[np.maximum(a.ais_row, 0)], -1)
+        vessel_of = np.full(track.size, -1, np.int64)  # (no AIS vessel predicted: none)
+        vessel_of[has] = pred.vessel[a.ais_row[has]]
 
         m = pred.vessel.size
         radar_row = np.full(m, -1, np.int64)

@@ -6,12 +6,18 @@ North), ``status`` (AIS: ``tracking`` or the outlier kind of the last report; ra
 ``confirmed`` / ``tentative``), ``std_m`` (1-sigma position, m, the root mean square of the
 East and North sigmas), ``name`` (AIS static reports) and ``trail`` (the last positions
 shown, ``[lon, lat]``, oldest first). Geometry: ``Point [lon, lat]``.
+
+With radar-AIS fusion (AIS and radar inputs, :mod:`seatrack.live.fusion`), radar features
+carry the fusion of the last scan: ``mmsi`` (the associated AIS vessel, null when none),
+``identity_prob`` (null when none) and ``class`` (``ais`` | ``dark`` | ``unknown``); AIS
+features carry ``not_seen`` (bool). Without fusion these are null.
 """
 
 from __future__ import annotations
 
 import math
 from collections import deque
+from collections.abc import Mapping
 from dataclasses import dataclass
 from datetime import UTC
 from datetime import datetime
@@ -68,6 +74,8 @@ class Picture:
         self.trails: dict[str, deque] = {}
         self.dirty: set[str] = set()
         self.removed: set[str] = set()
+        self.fused = False  # radar-AIS fusion on: the fusion properties are set
+        self.not_seen: set[int] = set()  # MMSIs flagged not seen at the last fused scan
 
     def _put(self, fid: str, lat: float, lon: float, props: dict[str, Any]) -> None:
         trail = self.trails.setdefault(fid, deque(maxlen=TRAIL))
@@ -95,6 +103,7 @@ class Picture:
                 "status": OUTLIER_KINDS.get(kind, "tracking"),
                 "std_m": _num(tr.std_pos_m[k], 2),
                 "name": names.get(m, ""),
+                "not_seen": (m in self.not_seen) if self.fused else None,
             }
             self._put(f"ais:{m}", tr.lat[k], tr.lon[k], props)
 
@@ -113,12 +122,35 @@ class Picture:
                 "status": "confirmed" if r.confirmed else "tentative",
                 "std_m": _num(r.std_m, 2),
                 "name": "",
+                "identity_prob": None,
+                "class": None,
             }
             self._put(fid, r.lat, r.lon, props)
         for fid in [f for f in self.features if f.startswith("radar:") and f not in keep]:
             del self.features[fid]
             self.trails.pop(fid, None)
             self.removed.add(fid)
+
+    def set_fusion(self, tracks: Mapping[int, Any], not_seen: set[int]) -> None:
+        """The fusion's result of the last scan: per radar track id a
+        :class:`~seatrack.live.fusion.FusedTrack` (``mmsi``, ``identity_prob``, ``class``),
+        and the MMSIs of the AIS vessels ``not_seen``."""
+        for tid, f in tracks.items():
+            feat = self.features.get(f"radar:{tid}")
+            if feat is None:
+                continue
+            p = feat["properties"]
+            p["mmsi"] = f.mmsi
+            p["identity_prob"] = None if f.identity_prob is None else _num(f.identity_prob, 4)
+            p["class"] = f.klass
+            self.dirty.add(f"radar:{tid}")
+        changed = self.not_seen ^ not_seen
+        self.not_seen = set(not_seen)
+        for m in changed:
+            feat = self.features.get(f"ais:{m}")
+            if feat is not None:
+                feat["properties"]["not_seen"] = m in not_seen
+                self.dirty.add(f"ais:{m}")
 
     def collection(self) -> dict[str, Any]:
         """The whole picture as a GeoJSON FeatureCollection."""

@@ -1,5 +1,5 @@
-"""The live process: sources -> bounded queue -> NMEA / plots -> trackers -> picture,
-web server, NMEA output and store, in one asyncio loop.
+"""The live process: sources -> bounded queue -> NMEA / plots -> trackers -> fusion ->
+picture, web server, NMEA output and store, in one asyncio loop.
 
 One consumer task takes chunks of lines off the queue (several at a time, so that a
 burst is converted to vessel planes in one vectorised call), runs them through the
@@ -9,6 +9,8 @@ together with the picture (:mod:`seatrack.live.counters`). Radar chunks go to
 :class:`~seatrack.live.radar.LiveRadar` when a radar is configured. A ticker closes timed
 out scans and fragments, refreshes the picture and feeds the web clients, the NMEA output
 and the store once a second or faster.
+With AIS and radar inputs, every closed scan runs one radar-AIS fusion step
+(:class:`~seatrack.live.fusion.LiveFusion`) on the AIS states emitted so far.
 """
 
 from __future__ import annotations
@@ -56,6 +58,7 @@ class LiveOptions:
     tick_s: float = 0.25
     commit_s: float = 0.5
     ais_config: Any = None
+    fusion: Any = None  # FusionConfig of radar.toml's [fusion] table (default: defaults)
 
 
 class LiveProcess:
@@ -84,6 +87,16 @@ class LiveProcess:
         self._closing = asyncio.Event()
         if opts.store is not None:
             self._open_store(opts.store)
+        self.fusion: Any = None
+        self._fusion_emitted = False  # the fusion, not the store, empties ais.emitted
+        if opts.ais and self.radar is not None:
+            from seatrack.live.fusion import LiveFusion
+
+            self.fusion = LiveFusion(opts.radar, opts.fusion)
+            self.radar.listeners.append(self.fusion.scan)
+            self.picture.fused = True
+            if self.ais.emitted is None:
+                self.ais.emitted, self._fusion_emitted = [], True
         self.nmea_out: Any = None
         if opts.nmea_out is not None and self.radar is not None:
             from seatrack.live.nmea_out import NmeaOut
@@ -180,11 +193,17 @@ class LiveProcess:
         if not pos:
             return
         col = lambda f: np.array([f(d, m) for d, m in pos])  # noqa: E731
+        emitted = self.ais.emitted if self.fusion is not None else None
+        n0 = 0 if emitted is None else len(emitted)
         used = self.ais.add(
             col(lambda d, m: d.mmsi).astype(np.int64), col(lambda d, m: m.time_s),
             col(lambda d, m: d.lat), col(lambda d, m: d.lon), col(lambda d, m: d.sog_kn),
             col(lambda d, m: d.cog_deg),
         )  # fmt: skip
+        if self.fusion is not None and emitted is not None:  # every used report's state
+            self.fusion.add_estimates(emitted[n0:])
+            if self._fusion_emitted:
+                emitted.clear()
         n_used = int(used.sum())
         cnt.received += len(pos)
         cnt.decoded += n_used
@@ -231,6 +250,8 @@ class LiveProcess:
         if self.radar is not None and self.radar.changed:
             self.picture.set_radar(self.radar.current)
             self.radar.changed = False
+            if self.fusion is not None:
+                self.picture.set_fusion(self.fusion.tracks, self.fusion.not_seen)
         changes = self.picture.take_changes()
         if changes is not None:
             for fn in self.listeners:
@@ -241,6 +262,10 @@ class LiveProcess:
         h = self.counters.health()
         h["vessels"] = sum(1 for v in self.ais.vessels.values() if v.estimate is not None)
         h["radar_tracks"] = 0 if self.radar is None else self.radar.n_tracks
+        if self.fusion is not None:
+            h["dark"] = self.fusion.n_dark
+            h["not_seen"] = len(self.fusion.not_seen)
+            h["fusion_ms"] = self.fusion.latency.percentiles_ms()
         h["pending_fragments"] = self.assembler.pending
         h["queue"] = self.queue.qsize()
         if self.store is not None:

@@ -3,7 +3,7 @@
  * a short trail per track; click for details. Online: OSM tiles and OpenSeaMap seamarks;
  * offline: the Natural Earth coast from /api/land under them.
  * For people and tests: <body data-ais data-radar data-updates> and, per marker, an
- * element .st-live with data-id, data-lat, data-lon. */
+ * element .st-live with data-id, data-lat, data-lon, data-class (radar-AIS fusion). */
 (function () {
   "use strict";
   var VECTOR_S = 180, KN = 0.514444, R = 6371000;
@@ -26,15 +26,23 @@
   function popup(p) {
     var rows = [["id", p.id], ["source", p.source], ["MMSI", p.mmsi], ["name", p.name],
       ["time (UTC)", p.time_utc], ["SOG (kn)", p.sog_kn], ["COG (deg)", p.cog_deg],
-      ["status", p.status], ["sigma (m)", p.std_m]];
+      ["status", p.status], ["sigma (m)", p.std_m], ["class", p["class"]],
+      ["identity prob.", p.identity_prob], ["not seen", p.not_seen ? "yes" : null]];
     return '<table class="popup">' + rows.filter(function (r) { return r[1] !== null && r[1] !== ""; })
       .map(function (r) { return "<tr><td>" + r[0] + "</td><td>" + String(r[1]) + "</td></tr>"; })
       .join("") + "</table>";
   }
+  /* radar: red, dark (no AIS) magenta, with AIS green; AIS: blue, not seen orange */
+  function colorOf(p) {
+    if (p.source === "radar") {
+      return p["class"] === "dark" ? "#d0168a" : p["class"] === "ais" ? "#1e8449" : "#c0392b";
+    }
+    return p.not_seen ? "#e67e22" : "#1f5fa8";
+  }
   function draw(f) {
     var p = f.properties, c = f.geometry.coordinates, lat = c[1], lon = c[0];
     if (lat === null || lon === null) return;
-    var color = p.source === "radar" ? "#c0392b" : "#1f5fa8";
+    var color = colorOf(p);
     var it = items[p.id];
     if (!it) {
       it = items[p.id] = {
@@ -45,10 +53,15 @@
       };
       it.dot.bindPopup("");
     }
+    it.dot.setStyle({ color: color }); it.vec.setStyle({ color: color });
+    it.trail.setStyle({ color: color });
     it.dot.setLatLng([lat, lon]);
     it.dot.setPopupContent(popup(p));
     var el = it.dot.getElement && it.dot.getElement();
-    if (el) { el.dataset.id = p.id; el.dataset.lat = lat; el.dataset.lon = lon; }
+    if (el) {
+      el.dataset.id = p.id; el.dataset.lat = lat; el.dataset.lon = lon;
+      el.dataset.class = p["class"] || "";
+    }
     var v = p.sog_kn && p.cog_deg !== null ? p.sog_kn * KN * VECTOR_S : 0;
     it.vec.setLatLngs(v > 0 ? [[lat, lon], ahead(lat, lon, p.cog_deg, v)] : []);
     it.trail.setLatLngs((p.trail || []).map(function (q) { return [q[1], q[0]]; }));

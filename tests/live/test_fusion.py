@@ -1,0 +1,154 @@
+"""Radar-AIS fusion inside the live process, over loopback UDP: the scene of
+``tests/fusion_samples.py`` (two AIS-carrying vessels, one dark) replayed into a live
+process classes the radar tracks (read from ``/api/tracks`` and ``/api/health``), and the
+classes at the last scan equal ``seatrack fuse``
+on the same AIS and plot files."""
+
+from __future__ import annotations
+
+import asyncio
+
+import aiohttp
+import numpy as np
+import pytest
+
+from fusion_samples import write_scene
+from live.streams import started
+from live.streams import udp_send
+from live.streams import wait_for
+from seatrack.fusion.picture import CLASSES
+from seatrack.fusion.picture import fuse_picture
+from seatrack.fusion.picture import load_fusion_config
+from seatrack.fusion.picture import parse_fusion_config
+from seatrack.io.ais import read_ais
+from seatrack.io.multitarget import read_unlabelled_plots
+from seatrack.live.ais import LiveAis
+from seatrack.live.fusion import LiveFusion
+from seatrack.live.nmea import encode_report
+from seatrack.live.process import LiveOptions
+from seatrack.live.sources import Source
+from seatrack.live.web import start_web
+
+UDP = Source("udp", "127.0.0.1", 0)
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    """The scene's files, its AIS reports as NMEA (``ais.nmea``) and the live run."""
+    d = tmp_path_factory.mktemp("scene")
+    ais_csv, plots_csv, toml = write_scene(d)
+    rep = read_ais([ais_csv])
+    lines = []
+    for m, t, la, lo, sog, cog in zip(rep.mmsi, rep.t, rep.lat, rep.lon, rep.sog_kn,
+                                      rep.cog_deg, strict=True):  # fmt: skip
+        lines += encode_report(int(m), float(t), float(la), float(lo), float(sog), float(cog))
+    nmea = d / "ais.nmea"
+    nmea.write_bytes(b"\n".join(lines) + b"\n")
+    setup, cfg = load_fusion_config(toml)
+    text = plots_csv.read_text().splitlines()
+    header, rows = text[0], text[1:]
+    times = [r.split(",", 1)[0] for r in rows]
+    scans: dict[str, list[str]] = {}
+    for t, r in zip(times, rows, strict=True):
+        scans.setdefault(t, []).append(r)
+    datagrams = [("\n".join([header, *rs]) + "\n").encode() for rs in scans.values()]
+
+    async def go():
+        proc = await started(LiveOptions(ais=[UDP], plots=[UDP], radar=setup, fusion=cfg))
+        runner = await start_web(proc, "127.0.0.1", 0)
+        url = f"http://127.0.0.1:{proc.http_port}"
+        ais_port, plot_port = proc.udp_ports
+        for k in range(0, len(lines), 20):  # all AIS first: every state is there at each scan
+            udp_send(ais_port, [b"\n".join(lines[k : k + 20])])
+            await asyncio.sleep(0.001)
+        await wait_for(lambda: proc.counters.received == len(lines))
+        for k in range(0, len(datagrams), 10):
+            udp_send(plot_port, datagrams[k : k + 10])
+            await asyncio.sleep(0.001)
+        await wait_for(lambda: proc.counters.scans >= len(datagrams) - 1)
+        await proc.drain()
+        async with aiohttp.ClientSession() as s:
+            feats = (await (await s.get(url + "/api/tracks")).json())["features"]
+            health = await (await s.get(url + "/api/health")).json()
+        await runner.cleanup()
+        await proc.stop()
+        return proc, feats, health
+
+    proc, feats, health = asyncio.run(asyncio.wait_for(go(), 20.0))
+    return {"proc": proc, "feats": feats, "health": health, "nmea": nmea, "plots": plots_csv,
+            "setup": setup, "cfg": cfg, "rep": rep, "scans": len(datagrams)}  # fmt: skip
+
+
+def test_live_fusion_classes_ais_and_dark_vessels(scene):
+    proc, feats = scene["proc"], scene["feats"]
+    assert proc.counters.scans == scene["scans"] and proc.counters.check()
+    radar = [f["properties"] for f in feats if f["properties"]["source"] == "radar"]
+    ais = [f["properties"] for f in feats if f["properties"]["source"] == "ais"]
+    mmsis = sorted({int(m) for m in scene["rep"].mmsi})
+    assert len(mmsis) == 2 and len(ais) == 2
+    # the three vessels' radar tracks (the scene has clutter-free tracks but coasting ones)
+    by_class = {}
+    for p in radar:
+        by_class.setdefault(p["class"], []).append(p)
+    assert sorted(p["mmsi"] for p in by_class["ais"]) == mmsis
+    assert all(p["identity_prob"] > 0.9 for p in by_class["ais"])
+    assert len(by_class["dark"]) == 1 and by_class["dark"][0]["mmsi"] is None
+    assert by_class["dark"][0]["identity_prob"] is None
+    assert all(p["not_seen"] is False for p in ais)
+    h = scene["health"]
+    assert h["dark"] == 1 and h["not_seen"] == 0 and h["radar_tracks"] == len(radar)
+    assert h["fusion_ms"]["p99"] is not None
+
+
+def test_live_fusion_equals_batch_fuse_at_the_last_scan(scene):
+    """Per radar track at the last scan: the same class, MMSI and (to 1e-9) identity
+    probability as ``fuse_picture`` on the files of the same messages and plots."""
+    pic = fuse_picture(read_ais([scene["nmea"]]), read_unlabelled_plots(scene["plots"]),
+                       scene["setup"], scene["cfg"])  # fmt: skip
+    last = pic.radar.t == pic.radar.t.max()
+    names = pic.ais.vessel_mmsi
+    want = {
+        int(tid): (CLASSES[int(k)], int(names[v]) if v >= 0 else None)
+        for tid, k, v in zip(
+            pic.radar.track[last], pic.klass[last], pic.radar_vessel[last], strict=True
+        )  # fmt: skip
+    }
+    got = {tid: (f.klass, f.mmsi) for tid, f in scene["proc"].fusion.tracks.items()}
+    assert got == want
+    assert {c for c, _ in want.values()} == {"ais", "dark"}
+    prob = dict(zip(pic.radar.track[last].tolist(), pic.identity_prob[last], strict=True))
+    for tid, f in scene["proc"].fusion.tracks.items():
+        if f.identity_prob is None:
+            assert np.isnan(prob[tid])
+        else:
+            np.testing.assert_allclose(f.identity_prob, prob[tid], rtol=0, atol=1e-9)
+
+
+def test_a_vessel_rerun_replaces_its_later_states():
+    """An out-of-order report re-runs its vessel: the fusion keeps one state per report
+    time, the re-run ones replacing those it had; a scan drops the states it no longer
+    needs."""
+    setup, cfg = parse_fusion_config(
+        {"lat_deg": 56.0, "lon_deg": 7.0, "fusion": {"land_mask": False}}
+    )
+    fusion = LiveFusion(setup, cfg)
+    ais = LiveAis(window_s=30.0)
+    ais.emitted = []
+    t0, lat, lon = 1.7e9, 56.0, 7.0
+    step = 10 * 5.0 * 0.514444 / (111_320.0 * np.cos(np.radians(lat)))  # 5 kn East, 10 s
+    for k in (0, 1, 2, 4):
+        ais.add(np.array([219000001]), np.array([t0 + 10 * k]), np.array([lat]),
+                np.array([lon + k * step]), np.array([5.0]), np.array([90.0]))  # fmt: skip
+    fusion.add_estimates(ais.emitted)
+    before = dict(fusion.rows[0])
+    ais.emitted.clear()
+    ais.add(np.array([219000001]), np.array([t0 + 30]), np.array([lat]),
+            np.array([lon + 3 * step]), np.array([5.0]), np.array([90.0]))  # fmt: skip
+    assert [e.t for _, e in ais.emitted] == [t0 + 30, t0 + 40]  # the re-run
+    fusion.add_estimates(ais.emitted)
+    assert sorted(fusion.rows[0]) == [t0 + 10 * k for k in range(5)]
+    assert fusion.times[0] == [t0 + 10 * k for k in range(5)]
+    assert all(fusion.rows[0][t] == before[t] for t in (t0, t0 + 10, t0 + 20))
+    assert fusion.rows[0][t0 + 40] != before[t0 + 40]  # re-run with the report at 30 s
+    fusion.scan(t0 + 35, np.zeros(0, np.int64), None, {})
+    assert sorted(fusion.rows[0]) == [t0 + 30, t0 + 40]  # older states are not needed

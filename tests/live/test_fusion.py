@@ -152,3 +152,28 @@ def test_a_vessel_rerun_replaces_its_later_states():
     assert fusion.rows[0][t0 + 40] != before[t0 + 40]  # re-run with the report at 30 s
     fusion.scan(t0 + 35, np.zeros(0, np.int64), None, {})
     assert sorted(fusion.rows[0]) == [t0 + 30, t0 + 40]  # older states are not needed
+
+
+def test_a_failing_scan_consumer_is_counted_and_the_radar_goes_on() -> None:
+    """An exception in a scan listener (the fusion step) is counted by type; the radar's
+    own scan bookkeeping is done before and the next scans run."""
+    import numpy as np
+
+    from seatrack.io.radar import parse_radar_config
+    from seatrack.live.counters import Counters
+    from seatrack.live.radar import LiveRadar
+
+    setup = parse_radar_config({"lat_deg": 57.0, "lon_deg": 11.0, "scan_period_s": 2.0})
+    radar = LiveRadar(setup, Counters())
+    calls = []
+
+    def broken(*args: object) -> None:
+        calls.append(args[0])
+        raise RuntimeError("boom")
+
+    radar.listeners.append(broken)
+    for k in range(3):
+        radar.add(np.array([1000.0 + 2.0 * k]), np.array([5000.0]), np.array([0.5]), 0.0)
+        radar.flush()
+    assert radar.listener_errors == {"RuntimeError": 3}
+    assert len(calls) == 3 and radar.counters.scans == 3

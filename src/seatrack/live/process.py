@@ -266,6 +266,8 @@ class LiveProcess:
             h["dark"] = self.fusion.n_dark
             h["not_seen"] = len(self.fusion.not_seen)
             h["fusion_ms"] = self.fusion.latency.percentiles_ms()
+        if self.radar is not None and self.radar.listener_errors:
+            h["scan_consumer_errors"] = dict(self.radar.listener_errors)
         h["pending_fragments"] = self.assembler.pending
         h["queue"] = self.queue.qsize()
         if self.store is not None:

@@ -139,6 +139,8 @@ class LiveRadar:
         self.scan_plots: tuple[float, FloatArray, FloatArray] = (0.0, np.zeros(0), np.zeros(0))
         self.scan_rows: list[tuple] = []  # per current track: x, y, vx, vy (m, m/s), status
         self.listeners: list[Any] = []  # fn(t, ids, status, columns) after each scan
+        #: exceptions raised by listeners, by type (counted, reported in ``/api/health``)
+        self.listener_errors: dict[str, int] = {}
         self.on_scan: list[Any] = []  # fn(self) after each scan
 
     @property
@@ -202,7 +204,12 @@ class LiveRadar:
         self.counters.scan_latency.add(time.perf_counter() - t0)
         self.changed = True
         for fn in self.listeners:
-            fn(t, res.track[shown], res.status[shown], cols)
+            try:
+                fn(t, res.track[shown], res.status[shown], cols)
+            except Exception as exc:  # a failing consumer (the fusion) never stops the radar
+                self.listener_errors[type(exc).__name__] = (
+                    self.listener_errors.get(type(exc).__name__, 0) + 1
+                )
         for hook in self.on_scan:
             hook(self)
 

@@ -331,10 +331,9 @@ def parse_config(
         if base is not None:
             return dataclasses.replace(base, **kw)  # type: ignore[type-var]
         return cls(**kw)
-    except ConfigError:
-        raise
-    except (ValueError, TypeError) as exc:
-        raise ConfigError(f"{source}: {exc}") from None
+    except (ValueError, TypeError) as exc:  # the constructor's checks: name the source
+        text = str(exc)
+        raise ConfigError(text if text.startswith(f"{source}:") else f"{source}: {text}") from None
 
 
 def to_edge(config: Any) -> dict[str, Any]:

@@ -500,7 +500,12 @@ class MultiModelTrackConfig(Checked):
         3.0, key="sigma_accel_mps2", unit="m/s^2", doc="white acceleration std per axis", min=0
     )
     accel: float = param(
-        10.0, key="accel_g", unit="g", doc="magnitude of the N/E/S/W hypotheses", min=0
+        10.0,
+        key="accel_g",
+        unit="g",
+        doc="magnitude of the N/E/S/W hypotheses",
+        min=0,
+        max=1e4,  # 10,000 g: a larger value is a typo (its square would overflow)
     )
     p_stay: float = param(0.9, doc="diagonal of the hypothesis transition matrix", min=0, max=1)
     conversion: str = conversion_param()

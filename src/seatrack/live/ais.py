@@ -161,10 +161,22 @@ class VesselFilter:
         return Estimate(r.t, s.x.copy(), std, kind, int(s.st[_SEGMENT]), nis)
 
 
-@dataclass(slots=True)
-class _Entry:
-    report: AisReport
-    before: FloatArray
+_NF = _NS + NX + NX * NX  # numbers of a filter state
+_REPORT = ("t", "x", "y", "v0x", "v0y", "sog", "cog", "lat", "lon", "perf_s")
+
+
+def _entry(r: AisReport, before: FloatArray) -> FloatArray:
+    """A history entry in one array (memory: one object instead of a report, its ten
+    floats and a state): the filter state before the report, then the report's numbers."""
+    e = np.empty(_NF + len(_REPORT))
+    e[:_NF] = before
+    e[_NF:] = (r.t, r.x, r.y, r.v0x, r.v0y, r.sog, r.cog, r.lat, r.lon, r.perf_s)
+    return e
+
+
+def _entry_report(mmsi: int, e: FloatArray) -> AisReport:
+    """The report of a history entry."""
+    return AisReport(mmsi, *e[_NF:].tolist())
 
 
 class _Vessel:
@@ -174,7 +186,7 @@ class _Vessel:
         self.mmsi = mmsi
         self.lat0, self.lon0 = lat0, lon0
         self.filter = VesselFilter(par)
-        self.history: list[_Entry] = []
+        self.history: list[FloatArray] = []  # _entry arrays
         self.times: list[float] = []
         self.estimate: Estimate | None = None
         self.report: AisReport | None = None
@@ -186,7 +198,7 @@ class _Vessel:
         return self.times[-1] if self.times else self.t_restored
 
     def run(self, r: AisReport, emitted: list | None) -> Estimate | None:
-        self.history.append(_Entry(r, self.filter.snapshot()))
+        self.history.append(_entry(r, self.filter.s.a))
         self.times.append(r.t)
         est = self.filter.step(r)
         if est is not None:
@@ -268,12 +280,12 @@ class LiveAis:
             v.run(r, self.emitted)
         elif r.t >= v.last_t - self.window_s and v.times:
             k = bisect.bisect_right(v.times, r.t)
-            redo = v.history[k:]
-            v.filter.restore(redo[0].before)
+            redo = [r] + [_entry_report(v.mmsi, e) for e in v.history[k:]]
+            v.filter.restore(v.history[k][:_NF])
             del v.history[k:]
             del v.times[k:]
-            for e in [_Entry(r, redo[0].before), *redo]:
-                v.run(e.report, self.emitted)
+            for e in redo:
+                v.run(e, self.emitted)
         else:
             return False
         v.prune(self.window_s)

@@ -256,21 +256,21 @@ class LiveAis:
         """Add position reports (arrival order; values checked by the caller); returns
         which were used (False = late)."""
         n = len(mmsi)
+        mm, la, lo = mmsi.tolist(), lat.tolist(), lon.tolist()  # Python numbers: faster
         lat0, lon0 = np.empty(n), np.empty(n)
+        vessels = self.vessels
         for k in range(n):
-            v = self.vessels.get(int(mmsi[k]))
+            v = vessels.get(mm[k])
             if v is None:
-                v = self.vessels[int(mmsi[k])] = _Vessel(int(mmsi[k]), lat[k], lon[k], self.par)
+                v = vessels[mm[k]] = _Vessel(mm[k], la[k], lo[k], self.par)
             lat0[k], lon0[k] = v.lat0, v.lon0
         en, v0, sog, cog = plane_reports(lat, lon, lat0, lon0, sog_kn, cog_deg)
-        used = np.ones(n, dtype=bool)
-        for k in range(n):
-            rep = AisReport(
-                int(mmsi[k]), float(t[k]), float(en[k, 0]), float(en[k, 1]), float(v0[k, 0]),
-                float(v0[k, 1]), float(sog[k]), float(cog[k]), float(lat[k]), float(lon[k]),
-                0.0 if perf_s is None else float(perf_s[k]),
-            )  # fmt: skip
-            used[k] = self.add_report(rep)
+        cols = zip(
+            mm, t.tolist(), en[:, 0].tolist(), en[:, 1].tolist(), v0[:, 0].tolist(),
+            v0[:, 1].tolist(), sog.tolist(), cog.tolist(), la, lo,
+            [0.0] * n if perf_s is None else perf_s.tolist(), strict=True,
+        )  # fmt: skip
+        used = np.array([self.add_report(AisReport(*c)) for c in cols], dtype=bool)
         return used
 
     def add_report(self, r: AisReport) -> bool:

@@ -14,13 +14,15 @@ from seatrack.live.ais_step import NO_ESTIMATE
 from seatrack.live.ais_step import NX
 from seatrack.live.ais_step import SCALARS
 from seatrack.live.ais_step import causal_step
+from seatrack.live.ais_step import param_array
 
 NAN = math.nan
 
 
 class Vessel:
     def __init__(self) -> None:
-        self.p = kernel_params(causal_config())
+        self.par = kernel_params(causal_config())
+        self.p = param_array(self.par)
         self.st = np.zeros(len(SCALARS))
         self.st[SCALARS.index("prev_t")] = NAN
         self.st[SCALARS.index("sog_t")] = -math.inf
@@ -36,14 +38,14 @@ def test_first_report_initialises_a_segment():
     assert status == ESTIMATE and kind == 0 and math.isnan(nis)
     np.testing.assert_array_equal(v.x, [10.0, 20.0, 3.0, 4.0, 0.0])
     assert v.st[SCALARS.index("segment")] == 1
-    assert v.std[0] == v.p.sigma_pos
+    assert v.std[0] == v.par.sigma_pos
 
 
 def test_update_moves_towards_the_report_and_keeps_p_symmetric_pd():
     v = Vessel()
     v.step(0.0, 0.0, 0.0, 0.0, 5.0, 5.0, 0.0)
     status, kind, nis = v.step(10.0, 0.0, 51.0, 0.0, 5.0, 5.0, 0.0)
-    assert status == ESTIMATE and kind == 0 and 0.0 <= nis < v.p.gate
+    assert status == ESTIMATE and kind == 0 and 0.0 <= nis < v.par.gate
     assert 50.0 < v.x[1] < 51.0
     np.testing.assert_allclose(v.P, v.P.T, rtol=0, atol=1e-9)
     assert np.all(np.linalg.eigvalsh(v.P) > 0)
@@ -53,8 +55,8 @@ def test_implausible_jump_is_flagged_then_reinitialises():
     v = Vessel()
     v.step(0.0, 0.0, 0.0, 0.0, 5.0, 5.0, 0.0)
     v.step(10.0, 0.0, 50.0, 0.0, 5.0, 5.0, 0.0)
-    kinds = [v.step(11.0 + k, 50_000.0, 50.0)[1] for k in range(v.p.reinit_after)]
-    assert kinds[:-1] == [OutlierKind.IMPLAUSIBLE_JUMP] * (v.p.reinit_after - 1)
+    kinds = [v.step(11.0 + k, 50_000.0, 50.0)[1] for k in range(v.par.reinit_after)]
+    assert kinds[:-1] == [OutlierKind.IMPLAUSIBLE_JUMP] * (v.par.reinit_after - 1)
     assert kinds[-1] == 0 and v.x[0] == 50_000.0
     assert v.st[SCALARS.index("segment")] == 2
 
@@ -62,7 +64,7 @@ def test_implausible_jump_is_flagged_then_reinitialises():
 def test_implausible_jump_after_a_long_gap_gets_no_estimate():
     v = Vessel()
     v.step(0.0, 0.0, 0.0)
-    status, _, _ = v.step(v.p.max_gap + 10.0, 1e9, 0.0)
+    status, _, _ = v.step(v.par.max_gap + 10.0, 1e9, 0.0)
     assert status == NO_ESTIMATE
     assert v.x[0] == 0.0
 

@@ -23,6 +23,7 @@ centred on its first report (as the batch tracker's, in time order).
 from __future__ import annotations
 
 import bisect
+import functools
 import math
 from dataclasses import dataclass
 from dataclasses import replace
@@ -44,10 +45,12 @@ from seatrack.live.ais_step import NO_ESTIMATE
 from seatrack.live.ais_step import NX
 from seatrack.live.ais_step import SCALARS
 from seatrack.live.ais_step import causal_step
+from seatrack.live.ais_step import param_array
 
 FloatArray = NDArray[np.float64]
 _SEGMENT = SCALARS.index("segment")
 _NS = len(SCALARS)
+_param_array = functools.lru_cache(maxsize=8)(param_array)  # one array per configuration
 
 __all__ = ["AisReport", "LiveAis", "VesselFilter", "causal_config", "plane_reports"]
 
@@ -138,6 +141,7 @@ class VesselFilter:
 
     def __init__(self, par: KernelParams) -> None:
         self.par = par
+        self.p = _param_array(par)
         self.s = _State()
 
     def snapshot(self) -> FloatArray:
@@ -154,7 +158,7 @@ class VesselFilter:
         s = self.s
         std = np.empty(NX)
         status, kind, nis = causal_step(
-            self.par, s.st, s.x, s.P, r.t, r.x, r.y, r.v0x, r.v0y, r.sog, r.cog, std
+            self.p, s.st, s.x, s.P, r.t, r.x, r.y, r.v0x, r.v0y, r.sog, r.cog, std
         )
         if status == NO_ESTIMATE:
             return None

@@ -126,6 +126,12 @@ def health(url: str) -> dict:
         return json.loads(r.read())
 
 
+def cpu_s(pid: int) -> float:
+    """CPU time (user + system, s) a process has used so far."""
+    fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
+
+
 def peak_rss_mb(pid: int) -> float:
     for line in Path(f"/proc/{pid}/status").read_text().splitlines():
         if line.startswith("VmHWM:"):
@@ -147,6 +153,7 @@ def load(args: argparse.Namespace, tmp: Path) -> None:
     p, info = launch(["--ais", "udp://127.0.0.1:0", "--plots", "udp://127.0.0.1:0",
                       "--config", str(tmp / "radar.toml"), "--http", "127.0.0.1:0"])  # fmt: skip
     ais_port, plot_port = info["ports"]
+    cpu0 = cpu_s(p.pid)
     rng = np.random.default_rng(0)
     nv = args.vessels
     mmsi = 200_000_000 + np.arange(nv)
@@ -201,6 +208,7 @@ def load(args: argparse.Namespace, tmp: Path) -> None:
         time.sleep(1.0)
     busy_s = t_done - w0
     rss = peak_rss_mb(p.pid)
+    cpu = cpu_s(p.pid) - cpu0
     p.send_signal(signal.SIGTERM)
     p.wait(60)
     queue_full = h["rejected"].get("queue full", 0)
@@ -213,6 +221,10 @@ def load(args: argparse.Namespace, tmp: Path) -> None:
     print(
         f"  processed at {(h['received'] - queue_full) / busy_s:,.0f} msg/s sustained "
         f"(until the queue was empty, {busy_s:.1f} s); target 20,000 msg/s, no loss"
+    )
+    print(
+        f"  process CPU time {cpu:.1f} s under load: {1e6 * cpu / max(h['received'], 1):.0f} us "
+        f"per message received, AIS and radar together (less sensitive to the load than rates)"
     )
     print(
         f"  latency datagram -> picture: p50 {h['latency_ms']['p50']} ms, "

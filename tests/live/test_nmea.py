@@ -11,6 +11,7 @@ from seatrack.live.nmea import Assembler
 from seatrack.live.nmea import Duplicates
 from seatrack.live.nmea import decode_message
 from seatrack.live.nmea import parse_tag_time
+from seatrack.live.nmea import payload_int
 from seatrack.live.nmea import tag_block
 
 
@@ -63,3 +64,17 @@ def test_tag_blocks_and_fragments_per_source():
 def test_duplicates_within_the_window():
     d = Duplicates(10.0)
     assert not d.seen(b"x", 0.0) and d.seen(b"x", 5.0) and not d.seen(b"x", 16.0)
+
+
+def test_payload_int_equals_the_per_character_decoding():
+    rng = np.random.default_rng(1)
+    chars = list(range(48, 120))
+    for n in (4, 28, 56):
+        for _ in range(300):
+            payload = bytes(rng.choice(chars, n).tolist())
+            ref = 0
+            for c in payload:
+                ref = (ref << 6) | (c - 48 if c < 88 else c - 56)
+            assert payload_int(payload) == ref
+    for bad in (b"13u?etPv2;0n:dDPwUM1U1Cb06 9D", b"13u?\x7f", b"1*2,", b"1/2+"):
+        assert payload_int(bad) is None

@@ -18,6 +18,7 @@ repeated by one): the key is its armoured payload (all fragments), remembered fo
 
 from __future__ import annotations
 
+import binascii
 import re
 from collections import OrderedDict
 from dataclasses import dataclass
@@ -34,7 +35,7 @@ from seatrack.io.ais.reports import SOG_NOT_AVAILABLE_KN
 
 __all__ = [
     "Assembler", "Decoded", "Duplicates", "Message", "checksum_ok", "decode_message",
-    "encode_report", "parse_tag_time", "tag_block",
+    "encode_report", "parse_tag_time", "payload_int", "tag_block",
 ]  # fmt: skip
 
 _TAG = re.compile(rb"^\\([^\\]*)\\")
@@ -197,8 +198,23 @@ class Decoded:
         return self.msg_type in POSITION_TYPES
 
 
-#: 6-bit value of each armoured payload character (ITU-R M.1371 / IEC 61162-1)
-_SIXBIT = {c: (c - 48 if c < 88 else c - 56) for c in range(48, 120)}
+#: the armoured payload characters (ITU-R M.1371 / IEC 61162-1: ``c - 48`` below 88, else
+#: ``c - 56``) translated to the base64 characters of the same 6-bit values; every other
+#: byte to ``!``, which the base64 decoder rejects
+_B64 = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/"
+_TO_B64 = bytes(_B64[c - 48 if c < 88 else c - 56] if 48 <= c < 120 else 33 for c in range(256))
+
+
+def payload_int(payload: bytes) -> int | None:
+    """The bits of an armoured payload whose length is a multiple of 4 characters (24
+    bits) as one integer (first bit most significant); None if a character is not a
+    payload character. Decoded in C (``bytes.translate`` and base64), not per character."""
+    try:
+        return int.from_bytes(
+            binascii.a2b_base64(payload.translate(_TO_B64), strict_mode=True), "big"
+        )
+    except binascii.Error:
+        return None
 
 
 def _class_a(sentence: bytes) -> tuple[int, int, float, float, float, float] | None:
@@ -209,12 +225,9 @@ def _class_a(sentence: bytes) -> tuple[int, int, float, float, float, float] | N
     payload = fields[5]
     if len(payload) != 28 or payload[:1] not in (b"1", b"2", b"3") or fields[6][:1] != b"0":
         return None
-    v = 0
-    for c in payload:
-        d = _SIXBIT.get(c)
-        if d is None:
-            return None
-        v = (v << 6) | d
+    v = payload_int(payload)
+    if v is None:
+        return None
     lon = (v >> 79) & 0xFFFFFFF
     lon = lon - 0x10000000 if lon & 0x8000000 else lon
     lat = (v >> 52) & 0x7FFFFFF

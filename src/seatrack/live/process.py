@@ -192,13 +192,12 @@ class LiveProcess:
                 cnt.decoded += 1
         if not pos:
             return
-        col = lambda f: np.array([f(d, m) for d, m in pos])  # noqa: E731
         emitted = self.ais.emitted if self.fusion is not None else None
         n0 = 0 if emitted is None else len(emitted)
+        rows = np.array([(d.lat, d.lon, d.sog_kn, d.cog_deg, m.time_s) for d, m in pos])
         used = self.ais.add(
-            col(lambda d, m: d.mmsi).astype(np.int64), col(lambda d, m: m.time_s),
-            col(lambda d, m: d.lat), col(lambda d, m: d.lon), col(lambda d, m: d.sog_kn),
-            col(lambda d, m: d.cog_deg),
+            np.array([d.mmsi for d, _ in pos], dtype=np.int64), rows[:, 4], rows[:, 0],
+            rows[:, 1], rows[:, 2], rows[:, 3],
         )  # fmt: skip
         if self.fusion is not None and emitted is not None:  # every used report's state
             self.fusion.add_estimates(emitted[n0:])

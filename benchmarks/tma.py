@@ -338,7 +338,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="few runs and repeats (smoke test)")
     ap.add_argument(
-        "--runs", type=int, default=None, help="Monte-Carlo runs (default 300; quick 30)"
+        "--runs", type=int, default=None, help="Monte-Carlo runs (default 300, frequency section 100; quick 30 / 10)"
     )
     ap.add_argument("--seed", type=int, default=2024)
     ap.add_argument("--section", choices=("all", "bearings", "frequency"), default="all")
@@ -353,7 +353,7 @@ def main() -> None:
             ("ratio", "ratio", ".3g"), ("note", "note")]  # fmt: skip
     if args.section in ("all", "frequency"):
         n_geom = args.geometries or (6 if args.quick else 40)
-        runs_f = args.runs or (10 if args.quick else 20)
+        runs_f = args.runs or (10 if args.quick else 100)
         print(f"TMA with frequency and ATB ({n_geom} geometries per class, {runs_f} runs each)")
         print(format_table(frequency_section(n_geom, runs_f, args.seed), cols))
     if args.section == "frequency":

@@ -338,7 +338,10 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--quick", action="store_true", help="few runs and repeats (smoke test)")
     ap.add_argument(
-        "--runs", type=int, default=None, help="Monte-Carlo runs (default 300, frequency section 100; quick 30 / 10)"
+        "--runs",
+        type=int,
+        default=None,
+        help="Monte-Carlo runs (default 300, frequency section 100; quick 30 / 10)",
     )
     ap.add_argument("--seed", type=int, default=2024)
     ap.add_argument("--section", choices=("all", "bearings", "frequency"), default="all")

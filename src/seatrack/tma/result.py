@@ -349,15 +349,17 @@ def _nis(fit: Fit, sizes: dict[str, int]) -> dict[str, tuple[float, int]]:
 
 def _leg_estimates(
     bearings: Bearings, starts: FloatArray, beta: FloatArray, P: FloatArray | None,
-    valid: bool, conf: float,
+    valid: bool, conf: float, at_last: tuple[FloatArray, FloatArray],
 ) -> tuple[LastEstimate, ...]:  # fmt: skip
-    """Operator picture at the last bearing of every leg."""
+    """Operator picture at the last bearing of every leg; ``at_last`` is
+    :func:`operator_values` at the last bearing (the last leg's, computed once)."""
     out = []
     ends = np.concatenate([starts[1:], [np.inf]])
     for e in ends:
         i = int(np.searchsorted(bearings.t, e, side="left")) - 1
         t = float(bearings.t[i])
-        vals, G = operator_values(beta, starts, t, bearings.observer[i])
+        last_leg = i == len(bearings.t) - 1
+        vals, G = at_last if last_leg else operator_values(beta, starts, t, bearings.observer[i])
         cov6 = G @ P @ G.T if P is not None else np.full((6, 6), np.nan)
         sb = float(np.sqrt(max(cov6[3, 3], 0.0))) if P is not None else math.nan
         out.append(_last_estimate(vals, cov6, valid, sb, t, conf))
@@ -443,6 +445,6 @@ def finalise(
         nis=_nis(fit, sizes),
         determined={k: bool(v) for k, v in zip(names, det, strict=True)},
         leg_estimates=_leg_estimates(bearings, starts, fit.beta, None if P_full is None else P,
-                                     valid, cfg.confidence),
+                                     valid, cfg.confidence, (vals, G)),
         sound_speed=cfg.sound_speed,
     )  # fmt: skip

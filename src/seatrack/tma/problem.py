@@ -297,6 +297,8 @@ class Problem:
             arrs = [padb(getattr(p, name), n, name in _ZERO_PAD) for p in problems]
             if name == "fO":  # tonal columns too
                 arrs = [padb(a, size["T"], True, axis=1) for a in arrs]
+            if len(arrs) == 1:  # one problem: a batch of one (np.stack's checks cost more)
+                return arrs[0][None].copy()
             return np.stack(arrs)
 
         cols = {name: col(name) for name in _AXES}

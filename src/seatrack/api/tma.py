@@ -18,7 +18,18 @@ from seatrack.api.inputs import describe_source
 from seatrack.io.table import MIN_SIGMA
 from seatrack.io.table import InputError
 
-__all__ = ["tma", "TMAResult", "check_manoeuvres", "solve"]
+__all__ = ["tma", "TMAResult", "check_manoeuvres", "check_sigma_deg", "solve"]
+
+
+def check_sigma_deg(sigma_deg: Any, name: str = "sigma_deg") -> float:
+    """The bearing sigma (degrees) when a finite number in [MIN_SIGMA, 180), else
+    :class:`InputError` naming the argument ``name``."""
+    ok = isinstance(sigma_deg, (int, float)) and math.isfinite(sigma_deg)
+    if not (ok and MIN_SIGMA <= sigma_deg < 180):
+        raise InputError(
+            f"{name} must be a number of degrees in [{MIN_SIGMA:g}, 180), got {sigma_deg}"
+        )
+    return float(sigma_deg)
 
 
 def check_manoeuvres(
@@ -273,12 +284,7 @@ def solve(
     cfg = config if config is not None else TMAConfig()
     if sigma_deg is None:
         sigma_deg = math.degrees(cfg.sigma)
-    ok = isinstance(sigma_deg, (int, float)) and math.isfinite(sigma_deg)
-    if not (ok and MIN_SIGMA <= sigma_deg < 180):
-        raise InputError(
-            f"{name['sigma_deg']} must be a number of degrees in [{MIN_SIGMA:g}, 180), "
-            f"got {sigma_deg}"
-        )
+    check_sigma_deg(sigma_deg, name["sigma_deg"])
     speed = cfg.sound_speed if sound_speed_mps is None else float(sound_speed_mps)
     defaults = measurement_defaults(
         sigma_deg, _tonal_items(frequency_sigma_hz), atb_sigma_deg, range_sigma_m, speed, name

@@ -104,19 +104,16 @@ def register(app: typer.Typer) -> None:
         """TMA (DE 3446658) from bearings, tonal frequencies, ATB and ranges: position, course,
         speed and base frequencies of every contact with 1-sigma / 95 % values, support
         values, multi-leg targets and an observability check."""
+        from seatrack.api.tma import check_sigma_deg
         from seatrack.api.tma import solve
         from seatrack.commands.options import prepare_outputs
         from seatrack.io.atomic import atomic_write
         from seatrack.io.rep import is_rep
-        from seatrack.io.table import MIN_SIGMA
         from seatrack.io.tma import OPTION_NAMES
         from seatrack.io.tma import parse_tonal_values
         from seatrack.io.tma import solution_summary
 
-        if not (math.isfinite(sigma_deg) and MIN_SIGMA <= sigma_deg < 180):
-            raise InputError(
-                f"--sigma-deg must be a number of degrees in [{MIN_SIGMA:g}, 180), got {sigma_deg}"
-            )
+        check_sigma_deg(sigma_deg, "--sigma-deg")  # before the outputs are checked
         outputs = {"--out": out, "--plot": plot, "--rep-out": rep_out}
         prepare_outputs(outputs, inputs=[*bearings, support], images=["--plot"])
         if rep_out is not None and not all(is_rep(p) for p in bearings):

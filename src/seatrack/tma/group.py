@@ -54,9 +54,11 @@ class Item:
     detected: bool = False
 
 
-def _real_rows(stacked: Problem, p: Problem) -> NDArray[np.int64]:
-    """Indices of the rows of ``p`` in the padded batch ``stacked`` (blocks bearings,
-    support, frequency, ATB)."""
+def _real_rows(stacked: Problem, p: Problem) -> NDArray[np.int64] | slice:
+    """Rows of ``p`` in the padded batch ``stacked`` (blocks bearings, support, frequency,
+    ATB): a slice when ``p`` has bearings only, else their indices."""
+    if not (p.sk.shape[-1] or p.fz.shape[-1] or p.az.shape[-1]):
+        return slice(0, p.z.shape[-1])
     out, off = [], 0
     for name in ("z", "sk", "fz", "az"):
         out.append(off + np.arange(getattr(p, name).shape[-1]))
@@ -92,11 +94,12 @@ def solve_group(items: Sequence[Item], cfg: TMAConfig, sigma: float) -> list[TMA
     out = []
     for i, it in enumerate(items):
         keep = _real_rows(stacked, probs[i])
-        J, f0 = res.J[i][keep], np.zeros(0)
+        # a copy of the residuals (the solution keeps them; the batch is not kept alive)
+        r, J, f0 = np.array(res.r[i][keep]), res.J[i][keep], np.zeros(0)
         if probs[i].fz.size:  # joint Jacobian of the state and the base frequencies
             f0, J = probs[i].augmented(res.beta[i])
         fit = Fit(
-            res.beta[i], float(res.cost[i]), res.r[i][keep], J, W[i][keep],
+            res.beta[i], float(res.cost[i]), r, J, W[i][keep],
             int(its[i] + res.iterations[i]), int(tot[i] + res.iterations[i]),
             bool(res.converged[i]), f0,
         )  # fmt: skip

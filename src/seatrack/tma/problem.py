@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -163,6 +164,27 @@ _AXES = {
     "aC": "A", "aE": "A", "aobs": "A", "az": "A", "aw": "A",
 }  # fmt: skip
 _ZERO_PAD = {"wb", "sk", "sA", "soff", "sval", "sw", "fw", "fO", "aw", "f0fix"}
+#: the fields of the frequency (with their tonals) and ATB rows
+_FIELDS = {
+    "F": ("fC", "fE", "fobs", "fvel", "fz", "fw", "fO", "f0fix"),
+    "A": ("aC", "aE", "aobs", "az", "aw"),
+}
+
+
+@lru_cache(maxsize=64)
+def _no_rows(L1: int, kind: str) -> dict[str, FloatArray]:
+    """The fields of a measurement kind (``"F"`` or ``"A"``) without rows, for ``L1 - 1``
+    legs: zero-size arrays (read-only, shared by every problem without that kind)."""
+    shapes = {
+        "F": [(0, L1), (0, L1), (0, 2), (0, 2), (0,), (0,), (0, 0), (0,)],
+        "A": [(0, L1), (0, L1), (0, 2), (0,), (0,)],
+    }[kind]
+    out = {}
+    for name, shape in zip(_FIELDS[kind], shapes, strict=True):
+        a = np.zeros(shape)
+        a.flags.writeable = False
+        out[name] = a
+    return out
 
 
 @dataclass(frozen=True)
@@ -240,12 +262,9 @@ class Problem:
             fr = fr if fr is None or fi is None else fr.subset(fi)
             ai = None if ab is None else decimate(len(ab), index.size)
             ab = ab if ab is None or ai is None else ab.subset(ai)
-        f_names = ("fC", "fE", "fobs", "fvel", "fz", "fw", "fO", "f0fix")
-        a_names = ("aC", "aE", "aobs", "az", "aw")
         extra: dict[str, FloatArray] = {}
         if fr is None or not len(fr):
-            shapes = [(0, L1), (0, L1), (0, 2), (0, 2), (0,), (0,), (0, 0), (0,)]
-            extra.update({k: np.zeros(sh) for k, sh in zip(f_names, shapes, strict=True)})
+            extra.update(_no_rows(L1, "F"))
         else:
             tonals = fr.tonals
             assert fr.tonal is not None
@@ -255,16 +274,15 @@ class Problem:
                 leg_time_matrix(fr.t, starts), _leg_rows(fr.t, starts), fr.observer,
                 fr.observer_velocity, fr.frequency, 1.0 / fr.sigma**2, fO, f0fix,
             )  # fmt: skip
-            extra.update(zip(f_names, vals, strict=True))
+            extra.update(zip(_FIELDS["F"], vals, strict=True))
         if ab is None or not len(ab):
-            shapes = [(0, L1), (0, L1), (0, 2), (0,), (0,)]
-            extra.update({k: np.zeros(sh) for k, sh in zip(a_names, shapes, strict=True)})
+            extra.update(_no_rows(L1, "A"))
         else:
             avals = (
                 leg_time_matrix(ab.t, starts), _leg_rows(ab.t, starts), ab.observer, ab.angle,
                 1.0 / ab.sigma**2,
             )  # fmt: skip
-            extra.update(zip(a_names, avals, strict=True))
+            extra.update(zip(_FIELDS["A"], avals, strict=True))
         return Problem(
             C=leg_time_matrix(t, starts), obs=np.asarray(obs, dtype=float),
             z=np.asarray(z, dtype=float), wb=1.0 / sig**2, sk=rows.kind, sA=rows.A,
@@ -294,6 +312,9 @@ class Problem:
 
         def col(name: str) -> NDArray[Any]:
             n = size[_AXES[name]]
+            if n == 0:  # no problem has rows of this kind
+                a = getattr(problems[0], name)
+                return np.zeros((len(problems), 0) + a.shape[1:], a.dtype)
             arrs = [padb(getattr(p, name), n, name in _ZERO_PAD) for p in problems]
             if name == "fO":  # tonal columns too
                 arrs = [padb(a, size["T"], True, axis=1) for a in arrs]

@@ -341,29 +341,47 @@ def _nis(fit: Fit, sizes: dict[str, int]) -> dict[str, tuple[float, int]]:
     out, off = {}, 0
     for kind, m in sizes.items():
         if m:
-            sl = slice(off, off + m)
-            out[kind] = (float(np.sum(fit.w[sl] * fit.r[sl] ** 2)), m)
+            out[kind] = (float((fit.w[off : off + m] * fit.r[off : off + m] ** 2).sum()), m)
         off += m
     return out
 
 
 def _leg_estimates(
     bearings: Bearings, starts: FloatArray, beta: FloatArray, P: FloatArray | None,
-    valid: bool, conf: float, at_last: tuple[FloatArray, FloatArray],
+    valid: bool, conf: float, last: LastEstimate,
+    at_last: tuple[FloatArray, FloatArray, FloatArray],
 ) -> tuple[LastEstimate, ...]:  # fmt: skip
-    """Operator picture at the last bearing of every leg; ``at_last`` is
-    :func:`operator_values` at the last bearing (the last leg's, computed once)."""
+    """Operator picture at the last bearing of every leg.
+
+    ``at_last``: :func:`operator_values` and the covariance ``(6, 6)`` at the last bearing
+    (the last leg's, computed once); ``last`` is the solution's picture there, which is
+    the last leg's when valid (otherwise that one carries the measurement's bearing sigma,
+    the leg's the covariance's)."""
     out = []
-    ends = np.concatenate([starts[1:], [np.inf]])
-    for e in ends:
+    n_b = len(bearings.t)
+    for e in starts[1:]:  # the legs before the last end at the next start
         i = int(np.searchsorted(bearings.t, e, side="left")) - 1
-        t = float(bearings.t[i])
-        last_leg = i == len(bearings.t) - 1
-        vals, G = at_last if last_leg else operator_values(beta, starts, t, bearings.observer[i])
-        cov6 = G @ P @ G.T if P is not None else np.full((6, 6), np.nan)
-        sb = float(np.sqrt(max(cov6[3, 3], 0.0))) if P is not None else math.nan
-        out.append(_last_estimate(vals, cov6, valid, sb, t, conf))
+        out.append(_leg_estimate(bearings, starts, beta, P, valid, conf, i, at_last))
+    if valid:
+        out.append(last)
+    else:
+        out.append(_leg_estimate(bearings, starts, beta, P, valid, conf, n_b - 1, at_last))
     return tuple(out)
+
+
+def _leg_estimate(
+    bearings: Bearings, starts: FloatArray, beta: FloatArray, P: FloatArray | None,
+    valid: bool, conf: float, i: int, at_last: tuple[FloatArray, FloatArray, FloatArray],
+) -> LastEstimate:  # fmt: skip
+    """Operator picture at bearing ``i`` (see :func:`_leg_estimates`)."""
+    t = float(bearings.t[i])
+    if i == len(bearings.t) - 1:
+        vals, _, cov6 = at_last
+    else:
+        vals, G = operator_values(beta, starts, t, bearings.observer[i])
+        cov6 = G @ P @ G.T if P is not None else np.full((6, 6), np.nan)
+    sb = float(np.sqrt(max(cov6[3, 3], 0.0))) if P is not None else math.nan
+    return _last_estimate(vals, cov6, valid, sb, t, conf)
 
 
 def finalise(
@@ -403,7 +421,6 @@ def finalise(
     f0 = sf0 = np.zeros(0)
     fixed = np.zeros(0, bool)
     names = list(OPERATOR_NAMES)
-    funcs = np.concatenate([G, np.zeros((6, na - n))], axis=1)
     if F:
         assert bearings.frequencies is not None
         fr = bearings.frequencies
@@ -413,20 +430,26 @@ def finalise(
         sf0 = np.zeros(len(tonals))
         est_cov = np.diag(P_full)[n:] if P_full is not None else np.full(na - n, np.nan)
         sf0[~fixed] = np.sqrt(np.maximum(est_cov, 0.0))
-        est_rows = np.eye(na)[n:]
-        funcs = np.concatenate([funcs, est_rows])
         names += [f"f0:{k}" for k in np.asarray(tonals)[~fixed]]
-    if chk.full_rank:
-        det = np.ones(len(names), bool)
+    if chk.full_rank and observable:  # every value is determined
+        determined = dict.fromkeys(names, True)
     else:
-        det = determined_parameters(Jw, funcs, cfg.rank_tolerance)
-    if not observable:  # bearings alone fix only the bearing; other rows follow the rank test
-        geometry = dev > cfg.min_observer_deviation or extra > 0
-        det = det & (np.arange(det.size) == 3) if not geometry or chk.full_rank else det
+        if chk.full_rank:
+            det = np.ones(len(names), bool)
+        else:  # the operator values' gradients, then one row per estimated base frequency
+            funcs = np.concatenate(
+                [np.concatenate([G, np.zeros((6, na - n))], axis=1), np.eye(na)[n:]]
+            )
+            det = determined_parameters(Jw, funcs, cfg.rank_tolerance)
+        if not observable:  # bearings alone fix only the bearing; others follow the rank test
+            geometry = dev > cfg.min_observer_deviation or extra > 0
+            det = det & (np.arange(det.size) == 3) if not geometry or chk.full_rank else det
+        determined = dict(zip(names, det.tolist(), strict=True))
     if F and not valid:  # a sigma only for a base frequency the data determine
         sf0[~fixed] = [
-            np.sqrt(max(P_full[n + j, n + j], 0.0)) if (P_full is not None and det[6 + j])
-            else np.nan for j in range(int((~fixed).sum()))
+            np.sqrt(max(P_full[n + j, n + j], 0.0))
+            if (P_full is not None and determined[names[6 + j]]) else np.nan
+            for j in range(int((~fixed).sum()))
         ]  # fmt: skip
     sizes = {"bearing": N, "support": M, "frequency": F, "atb": A}
     return TMASolution(
@@ -443,8 +466,8 @@ def finalise(
         frequency_residuals=np.asarray(fit.r[N + M : N + M + F]),
         bow_angle_residuals=np.asarray(fit.r[N + M + F :]),
         nis=_nis(fit, sizes),
-        determined={k: bool(v) for k, v in zip(names, det, strict=True)},
+        determined=determined,
         leg_estimates=_leg_estimates(bearings, starts, fit.beta, None if P_full is None else P,
-                                     valid, cfg.confidence, (vals, G)),
+                                     valid, cfg.confidence, last, (vals, G, cov6)),
         sound_speed=cfg.sound_speed,
     )  # fmt: skip

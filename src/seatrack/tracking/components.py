@@ -221,6 +221,8 @@ class ScanData:
     pg : gate probability
     log_ps : log survival probability since the last scan
     clutter : the clutter rate (given, or estimated: ``clutter.given is None``)
+    space : the per-track filter's innovation space (``"polar"`` or ``"cartesian"``,
+        :func:`~seatrack.tracking.gating.innovation_space`, measured once by the engine)
     explained : expected number of target plots among the scan's plots (the roles add
         to it; what is left is clutter)
     """
@@ -235,6 +237,7 @@ class ScanData:
     pg: float
     log_ps: float
     clutter: ClutterRate
+    space: str
     explained: float = 0.0
 
     @property

@@ -32,7 +32,6 @@ from seatrack.tracking.existence import first_scan_share
 from seatrack.tracking.existence import ipda_update
 from seatrack.tracking.existence import probability
 from seatrack.tracking.gating import POLAR
-from seatrack.tracking.gating import innovation_space
 from seatrack.tracking.gating import log_jacobian
 from seatrack.tracking.gating import nis_logpdf
 from seatrack.tracking.initiation import polar_covariance
@@ -133,7 +132,6 @@ class TwoPointInitiator:
         self.init_scans = config.init_scans
         self.undetected = UndetectedTargets(config.births_per_scan)
         self.pending: list[PendingPlots] = []  # free plots of recent scans, one entry each
-        self._space: tuple[RecursiveFilter, SensorNoise, str] | None = None
 
     def initiate(
         self, flt: RecursiveFilter, sensor: SensorNoise, scan: ScanData, free: IntArray
@@ -183,7 +181,7 @@ class TwoPointInitiator:
     ) -> Births:
         """Start tracks from pairs (earlier plot ``i`` of ``prev``, this scan's plot ``j``)."""
         first, second = prev.plots.take(i), scan.plots.take(j)
-        new, log_g = self._start(flt, sensor, first, second, scan.t)
+        new, log_g = self._start(flt, sensor, first, second, scan.t, scan.space)
         ok = new.status == UPDATED
         i, j, new, log_g = i[ok], j[ok], new.take(ok), log_g[ok]
         k = i.size
@@ -224,26 +222,25 @@ class TwoPointInitiator:
         self.pending = entries
 
     def _start(
-        self, flt: RecursiveFilter, sensor: SensorNoise, first: Plots, second: Plots, t: float
+        self,
+        flt: RecursiveFilter,
+        sensor: SensorNoise,
+        first: Plots,
+        second: Plots,
+        t: float,
+        space: str,
     ) -> tuple[TrackState, FloatArray]:
         """New tracks: the first plot with a zero-mean velocity prior (std
         ``initial_speed_sigma`` per axis: the target class), predicted to this scan and
         updated with the second plot by the filter itself; and the log density of the
         second plot under the prediction (polar measurement space, from the filter's
-        innovation as in gating)."""
+        innovation as in gating; ``space``: the filter's innovation space)."""
         x, P = plot_gaussian(first, sensor, self.initial_speed_sigma)
         pred = flt.predict(flt.initiate(first.t, x, P), np.full(len(first), t))
         log_g = nis_logpdf(*flt.innovation(pred, second))[1]
-        space = self._innovation_space(flt, sensor)
         if space != POLAR:
             log_g = log_g + log_jacobian(space, second)
         return flt.update(pred, second), log_g
-
-    def _innovation_space(self, flt: RecursiveFilter, sensor: SensorNoise) -> str:
-        """The filter's innovation space, measured once per filter and sensor."""
-        if self._space is None or self._space[0] is not flt or self._space[1] != sensor:
-            self._space = (flt, sensor, innovation_space(flt, sensor))
-        return self._space[2]
 
 
 def _without(entries: list[PendingPlots], used: IntArray) -> list[PendingPlots]:

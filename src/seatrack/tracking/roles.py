@@ -267,7 +267,7 @@ class Tracker:
         dt = t - self._t if math.isfinite(self._t) else 0.0
         return ScanData(
             plots, plots.positions(), seq, t, self.n_scans, log_lam, pd,
-            self.config.gate_probability, -dt / self.config.mean_life, self.clutter,
+            self.config.gate_probability, -dt / self.config.mean_life, self.clutter, self.space,
         )  # fmt: skip
 
     def _scan(

@@ -62,7 +62,10 @@ def bearing_jacobian(d: ArrayLike) -> FloatArray:
     """d(bearing)/d(target x, y) = ``[dy, -dx] / r^2`` (rad/m), shape ``(..., 2)``."""
     dd = np.asarray(d, dtype=float)
     r2 = dd[..., 0] ** 2 + dd[..., 1] ** 2
-    return np.stack([dd[..., 1] / r2, -dd[..., 0] / r2], -1)
+    out = np.empty(r2.shape + (2,))
+    np.divide(dd[..., 1], r2, out=out[..., 0])
+    np.divide(-dd[..., 0], r2, out=out[..., 1])
+    return out
 
 
 def range_bearing_jacobian(d: ArrayLike) -> FloatArray:

@@ -63,16 +63,20 @@ def leg_time_matrix(t: ArrayLike, starts: ArrayLike) -> FloatArray:
     """
     tt = np.asarray(t, dtype=float)[..., None]
     s = np.asarray(starts, dtype=float)
-    ends = np.concatenate([s[1:], [np.inf]])
-    T = np.maximum(0.0, np.minimum(tt - s, ends - s))
-    return np.concatenate([np.ones(tt.shape), T], axis=-1)
+    ends = np.empty(s.shape)
+    ends[:-1] = s[1:]
+    ends[-1:] = np.inf
+    out = np.empty(tt.shape[:-1] + (1 + s.size,))
+    out[..., 0] = 1.0
+    np.maximum(0.0, np.minimum(tt - s, ends - s), out=out[..., 1:])
+    return out
 
 
 def leg_index(t: ArrayLike, starts: ArrayLike) -> NDArray[np.int64]:
     """Index of the leg that time ``t`` falls in (``T_Aj <= t < T_A(j+1)``; before ``t0``: 0)."""
     s = np.asarray(starts, dtype=float)
     j = np.searchsorted(s, np.asarray(t, dtype=float), side="right") - 1
-    return np.clip(j, 0, s.size - 1).astype(np.int64)
+    return np.minimum(np.maximum(j, 0), s.size - 1).astype(np.int64)
 
 
 def state_size(n_legs: int) -> int:

@@ -187,6 +187,14 @@ def _no_rows(L1: int, kind: str) -> dict[str, FloatArray]:
     return out
 
 
+def _repeat_rows(a: NDArray[Any], k: int) -> NDArray[Any]:
+    """Each batch entry of ``a`` repeated ``k`` times (axis 0); a kind without rows
+    (axis 1 empty) needs no copy, only the shape."""
+    if a.shape[1] == 0:
+        return np.empty((a.shape[0] * k,) + a.shape[1:], a.dtype)
+    return np.repeat(a, k, axis=0)
+
+
 @dataclass(frozen=True)
 class Problem:
     """Arrays of one (or a padded batch of) least-squares problem(s).
@@ -330,7 +338,7 @@ class Problem:
 
     def repeat(self, k: int) -> Problem:
         """Each batch entry repeated ``k`` times (for multi-start), batch ``K * k``."""
-        cols = {name: np.repeat(getattr(self, name), k, axis=0) for name in _AXES}
+        cols = {name: _repeat_rows(getattr(self, name), k) for name in _AXES}
         return Problem(
             square=self.square, c_last=np.repeat(self.c_last, k, axis=0),
             sound_speed=self.sound_speed, **cols,

@@ -21,6 +21,7 @@ from seatrack.tracking import MultiTargetTracker
 from seatrack.tracking import run_tracker
 from seatrack.tracking.auto import per_track_filter
 from seatrack.tracking.auto import scan_period
+from seatrack.tracking.gating import innovation_space
 from seatrack.tracking.roles import GNN
 from seatrack.tracking.roles import JPDA
 from seatrack.tracking.roles import Associator
@@ -133,6 +134,25 @@ def test_the_roles_honour_their_protocols():
     trk = Tracker(EKF(), config=TrackerConfig.from_keys(association="jpda", confirmation="m-of-n"))
     assert isinstance(trk.associator, JPDA) and isinstance(trk.manager, MofNManager)
     assert isinstance(Tracker(EKF()).associator, GNN)
+
+
+def test_the_roles_see_the_filter_s_innovation_space_measured_once():
+    """The engine measures the filter's innovation space once and gives it to the roles
+    with every scan (the initiator weighs its new tracks' plots with it)."""
+    seen: list[str] = []
+
+    class Recording(TwoPointInitiator):
+        def initiate(self, flt, sensor, scan, free):  # type: ignore[no-untyped-def]
+            seen.append(scan.space)
+            return super().initiate(flt, sensor, scan, free)
+
+    sim = _scenario(seed=32, targets=3)
+    flt = EKF(EKFConfig(q=0.1), SN)
+    trk = Tracker(flt, initiator=Recording())
+    times = np.unique(sim.plots.t)[:5]
+    for t in times:
+        trk.step(t, sim.plots.take(np.flatnonzero(sim.plots.t == t)))
+    assert seen == [innovation_space(flt, SN)] * times.size == [trk.space] * times.size
 
 
 def _docs_associator() -> type:

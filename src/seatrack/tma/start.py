@@ -17,6 +17,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import NDArray
@@ -49,11 +50,20 @@ class StartSearch:
     iterations_total: NDArray[np.int64]
 
 
+@lru_cache(maxsize=16)
+def _range_pairs(lo: float, hi: float, k: int) -> tuple[FloatArray, FloatArray]:
+    """Every pair ``(r1, r2)`` of ``k`` log-spaced ranges in ``[lo, hi]`` (m), r1 slowest;
+    read-only (shared by every problem)."""
+    ranges = np.geomspace(lo, hi, k)
+    r1, r2 = (a.ravel() for a in np.meshgrid(ranges, ranges, indexing="ij"))
+    r1.flags.writeable = r2.flags.writeable = False
+    return r1, r2
+
+
 def two_range_starts(bearings: Bearings, n: int, cfg: TMAConfig) -> FloatArray:
     """Starts with the target at range r1 on the first and r2 on the last bearing (S, n)."""
     lo, hi, k = cfg.start_ranges
-    ranges = np.geomspace(lo, hi, int(k))
-    r1, r2 = (a.ravel() for a in np.meshgrid(ranges, ranges, indexing="ij"))
+    r1, r2 = _range_pairs(lo, hi, int(k))
     b0, b1 = bearings.bearing[0], bearings.bearing[-1]
     u0 = np.array([np.sin(b0), np.cos(b0)])
     u1 = np.array([np.sin(b1), np.cos(b1)])

@@ -151,3 +151,46 @@ def test_noise_free_bearings_of_an_exact_geometry():
     b = Bearings(sc.times, bearing(d[:, 0], d[:, 1]), sc.observer.pos[:, :2])
     s = solve(b, sigma=sc.sigma)
     assert s.valid and s.smallest_singular_value > 1e-4
+
+
+def _picture(s, b, i):
+    vals, G = operator_values(s.state, s.starts, float(b.t[i]), b.observer[i])
+    return vals, G @ s.covariance @ G.T
+
+
+def test_leg_estimates_are_the_picture_at_each_leg_s_last_bearing():
+    """Each leg's estimate is the operator picture at the last bearing of the leg (values,
+    covariance ``G P G^T``); the last leg's is the solution's ``last`` when valid."""
+    sc = classic_scenario()
+    b = sc.bearings(np.random.default_rng(3))
+    t_man = float(b.t[len(b) // 2]) + 1.0
+    s = solve(b, sigma=sc.sigma, manoeuvres=[t_man], initial=sc.state)
+    assert s.valid and len(s.leg_estimates) == 2
+    i = int(np.searchsorted(b.t, t_man)) - 1
+    first, last = s.leg_estimates
+    vals, cov6 = _picture(s, b, i)
+    assert first.time == b.t[i] and first.range == vals[2] and first.speed == vals[5]
+    assert np.array_equal(first.covariance, cov6)
+    assert first.sigma_bearing == math.sqrt(cov6[3, 3])
+    names = ("time", "x", "y", "range", "bearing", "course", "speed", "sigma_range",
+             "sigma_bearing", "sigma_course", "sigma_speed")  # fmt: skip
+    assert all(getattr(last, k) == getattr(s.last, k) for k in names)
+    vals, cov6 = _picture(s, b, len(b) - 1)
+    assert last.range == vals[2] and np.array_equal(last.covariance, cov6)
+
+
+def test_the_last_leg_of_an_invalid_solution_keeps_the_covariance_s_bearing_sigma():
+    """Not valid: the operator values are NaN except the bearing; the solution's ``last``
+    gives the measurement's bearing sigma, the leg estimate that of the covariance."""
+    sc = classic_scenario()
+    b = sc.bearings(np.random.default_rng(4))
+    far = np.array([0.0, 60_000.0, -10.0, 10.0])
+    s = solve(b, sigma=sc.sigma, initial=far, config=TMAConfig(max_iterations=2))
+    assert not s.valid and np.all(np.isfinite(s.covariance))
+    (leg,) = s.leg_estimates
+    vals, cov6 = _picture(s, b, len(b) - 1)
+    assert s.last.sigma_bearing == pytest.approx(sc.sigma, rel=1e-12)  # 1 / sqrt(w)
+    assert leg.sigma_bearing == math.sqrt(cov6[3, 3])
+    assert leg.sigma_bearing != pytest.approx(sc.sigma, rel=1e-3)
+    assert leg.bearing == s.last.bearing == vals[3]
+    assert math.isnan(leg.range) and math.isnan(leg.sigma_range) and math.isnan(leg.speed)

@@ -73,6 +73,7 @@ from numpy.typing import NDArray
 from scipy.stats import chi2
 
 from seatrack.config import Checked
+from seatrack.config import require
 from seatrack.geometry import angle_diff
 from seatrack.geometry import bearing
 from seatrack.geometry import polar_to_cart
@@ -111,6 +112,16 @@ __all__ = [
 # ---------------------------------------------------------------------------
 # Configuration and results
 # ---------------------------------------------------------------------------
+def _positive(v: float) -> bool:
+    """A finite number > 0 (NaN and infinity fail)."""
+    return bool(np.isfinite(v) and v > 0)
+
+
+def _count(v: float) -> bool:
+    """A whole number >= 1 (``int(v)`` raises for NaN and infinity)."""
+    return bool(int(v) == v and v >= 1)
+
+
 @dataclass(frozen=True)
 class SonarModel:
     """Sensor and motion model shared by the robust filters and their baselines.
@@ -152,20 +163,16 @@ class SonarModel:
     init_inflation: float = 4.0
 
     def __post_init__(self) -> None:
-        if int(self.init_plots) != self.init_plots or self.init_plots < 1:
-            raise ValueError(f"init_plots must be a positive integer, got {self.init_plots}")
-        for name in (
+        require(self, ("init_plots",), _count, "a positive integer")
+        positive = (
             "sigma_range",
             "sigma_bearing",
             "init_sigma_v",
             "init_sigma_acc",
             "init_inflation",
-        ):
-            v = getattr(self, name)
-            if not np.isfinite(v) or v <= 0:
-                raise ValueError(f"{name} must be a positive number, got {v}")
-        if not np.isfinite(self.sigma_a) or self.sigma_a < 0:
-            raise ValueError(f"sigma_a must be >= 0, got {self.sigma_a}")
+        )
+        require(self, positive, _positive, "a positive number")
+        require(self, ("sigma_a",), lambda v: np.isfinite(v) and v >= 0, ">= 0")
 
     @property
     def order(self) -> int:
@@ -223,16 +230,11 @@ class RobustConfig(Checked):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        for name in ("delta_range", "delta_bearing", "l_factor_range", "l_factor_bearing"):
-            v = getattr(self, name)
-            if not np.isfinite(v) or v <= 0:
-                raise ValueError(f"{name} must be a positive number, got {v}")
-        if int(self.window) != self.window or self.window < 1:
-            raise ValueError(f"window must be a positive integer, got {self.window}")
-        for name in ("delta_sum_range", "delta_sum_bearing"):
-            v = getattr(self, name)
-            if v is not None and (not np.isfinite(v) or v <= 0):
-                raise ValueError(f"{name} must be a positive number or None, got {v}")
+        positive = ("delta_range", "delta_bearing", "l_factor_range", "l_factor_bearing")
+        require(self, positive, _positive, "a positive number")
+        require(self, ("window",), _count, "a positive integer")
+        sums = ("delta_sum_range", "delta_sum_bearing")
+        require(self, sums, lambda v: v is None or _positive(v), "a positive number or None")
 
     @cached_property
     def delta(self) -> FloatArray:

@@ -9,6 +9,8 @@ import pytest
 from seatrack.config import Checked
 from seatrack.config import ConfigError
 from seatrack.config import describe
+from seatrack.config import is_positive_integer
+from seatrack.config import is_positive_number
 from seatrack.config import param
 from seatrack.config import parse_config
 from seatrack.config import redefault
@@ -142,6 +144,17 @@ def test_require_names_the_first_failing_field_and_its_value():
         Budget()
     with pytest.raises(ConfigError, match=r"^c\.toml: scale must be in \(0, 1\), got 2.0$"):
         parse_config(Budget, {"scale": 2.0, "share": 0.5}, source="c.toml")
+
+
+def test_positive_number_and_integer_tests():
+    assert [is_positive_number(v) for v in (1e-300, 2, 0.0, -1.0, math.nan, math.inf)] == [
+        True, True, False, False, False, False,
+    ]  # fmt: skip
+    assert [is_positive_integer(v) for v in (1, 3.0, 0, 1.5, -2)] == [
+        True, True, False, False, False,
+    ]  # fmt: skip
+    with pytest.raises(ValueError, match="NaN"):
+        is_positive_integer(math.nan)
 
 
 def test_every_param_config_of_the_package_is_checked():

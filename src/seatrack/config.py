@@ -42,6 +42,8 @@ from typing import Any
 from typing import TypeVar
 from typing import get_type_hints
 
+import numpy as np
+
 from seatrack.errors import UserError
 from seatrack.geometry import G0
 
@@ -57,6 +59,8 @@ __all__ = [
     "to_edge",
     "check_fields",
     "require",
+    "is_positive_number",
+    "is_positive_integer",
     "Checked",
 ]
 
@@ -288,6 +292,17 @@ def require(
         value = getattr(config, name)
         if not test(value):
             raise ValueError(f"{prefix}{name} must be {rule}, got {value}")
+
+
+def is_positive_number(v: float) -> bool:
+    """A finite number > 0 (NaN and infinity fail): a ``test`` of :func:`require`."""
+    return bool(np.isfinite(v) and v > 0)
+
+
+def is_positive_integer(v: float) -> bool:
+    """A whole number >= 1 (``int(v)`` raises for NaN and infinity): a ``test`` of
+    :func:`require`."""
+    return bool(int(v) == v and v >= 1)
 
 
 class Checked:

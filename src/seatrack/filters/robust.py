@@ -73,6 +73,8 @@ from numpy.typing import NDArray
 from scipy.stats import chi2
 
 from seatrack.config import Checked
+from seatrack.config import is_positive_integer
+from seatrack.config import is_positive_number
 from seatrack.config import require
 from seatrack.geometry import angle_diff
 from seatrack.geometry import bearing
@@ -112,16 +114,6 @@ __all__ = [
 # ---------------------------------------------------------------------------
 # Configuration and results
 # ---------------------------------------------------------------------------
-def _positive(v: float) -> bool:
-    """A finite number > 0 (NaN and infinity fail)."""
-    return bool(np.isfinite(v) and v > 0)
-
-
-def _count(v: float) -> bool:
-    """A whole number >= 1 (``int(v)`` raises for NaN and infinity)."""
-    return bool(int(v) == v and v >= 1)
-
-
 @dataclass(frozen=True)
 class SonarModel:
     """Sensor and motion model shared by the robust filters and their baselines.
@@ -163,7 +155,7 @@ class SonarModel:
     init_inflation: float = 4.0
 
     def __post_init__(self) -> None:
-        require(self, ("init_plots",), _count, "a positive integer")
+        require(self, ("init_plots",), is_positive_integer, "a positive integer")
         positive = (
             "sigma_range",
             "sigma_bearing",
@@ -171,7 +163,7 @@ class SonarModel:
             "init_sigma_acc",
             "init_inflation",
         )
-        require(self, positive, _positive, "a positive number")
+        require(self, positive, is_positive_number, "a positive number")
         require(self, ("sigma_a",), lambda v: np.isfinite(v) and v >= 0, ">= 0")
 
     @property
@@ -231,10 +223,12 @@ class RobustConfig(Checked):
     def __post_init__(self) -> None:
         super().__post_init__()
         positive = ("delta_range", "delta_bearing", "l_factor_range", "l_factor_bearing")
-        require(self, positive, _positive, "a positive number")
-        require(self, ("window",), _count, "a positive integer")
+        require(self, positive, is_positive_number, "a positive number")
+        require(self, ("window",), is_positive_integer, "a positive integer")
         sums = ("delta_sum_range", "delta_sum_bearing")
-        require(self, sums, lambda v: v is None or _positive(v), "a positive number or None")
+        require(
+            self, sums, lambda v: v is None or is_positive_number(v), "a positive number or None"
+        )
 
     @cached_property
     def delta(self) -> FloatArray:

@@ -9,9 +9,12 @@ import pytest
 from seatrack.config import Checked
 from seatrack.config import ConfigError
 from seatrack.config import describe
+from seatrack.config import is_positive_integer
+from seatrack.config import is_positive_number
 from seatrack.config import param
 from seatrack.config import parse_config
 from seatrack.config import redefault
+from seatrack.config import require
 from seatrack.config import to_edge
 
 
@@ -119,6 +122,39 @@ def test_checked_runs_the_bounds_and_then_the_subclass_check():
         Limits(high=math.nan)
     with pytest.raises(ValueError, match="must not exceed"):
         Limits(low=0.5, high=0.1)
+
+
+def test_require_names_the_first_failing_field_and_its_value():
+    @dataclasses.dataclass(frozen=True)
+    class Budget:
+        rows: int = 10
+        share: float = 0.5
+        scale: float = 1.0
+
+        def __post_init__(self) -> None:
+            require(self, ("rows",), lambda n: n >= 0, ">= 0", prefix="Budget.")
+            require(self, ("share", "scale"), lambda v: 0.0 < v < 1.0, "in (0, 1)")
+
+    assert Budget(scale=0.5).rows == 10
+    with pytest.raises(ValueError, match=r"^Budget\.rows must be >= 0, got -1$"):
+        Budget(rows=-1, share=2.0)  # the first check that fails
+    with pytest.raises(ValueError, match=r"^share must be in \(0, 1\), got nan$"):
+        Budget(share=math.nan, scale=0.5)
+    with pytest.raises(ValueError, match=r"^scale must be in \(0, 1\), got 1.0$"):
+        Budget()
+    with pytest.raises(ConfigError, match=r"^c\.toml: scale must be in \(0, 1\), got 2.0$"):
+        parse_config(Budget, {"scale": 2.0, "share": 0.5}, source="c.toml")
+
+
+def test_positive_number_and_integer_tests():
+    assert [is_positive_number(v) for v in (1e-300, 2, 0.0, -1.0, math.nan, math.inf)] == [
+        True, True, False, False, False, False,
+    ]  # fmt: skip
+    assert [is_positive_integer(v) for v in (1, 3.0, 0, 1.5, -2)] == [
+        True, True, False, False, False,
+    ]  # fmt: skip
+    with pytest.raises(ValueError, match="NaN"):
+        is_positive_integer(math.nan)
 
 
 def test_every_param_config_of_the_package_is_checked():

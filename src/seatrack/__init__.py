@@ -57,42 +57,22 @@ _LAZY: dict[str, str] = {
     "MofNManager": "seatrack.tracking.roles",
 }
 
-__all__ = [
-    "__version__",
-    "tma",
-    "TMAResult",
-    "track",
-    "ais",
-    "navigate",
-    "simulate",
-    "evaluate",
-    "fuse",
-    "Sensor",
-    "UserError",
-    "Tracker",
-    "Associator",
-    "Initiator",
-    "TrackManager",
-    "GNN",
-    "JPDA",
-    "TwoPointInitiator",
-    "ExistenceManager",
-    "MofNManager",
-]
+#: the public names: the version and every lazily loaded name
+__all__ = ["__version__", *_LAZY]
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # the names for type checkers (``X as X``: re-exported)
     from typing import Any
 
-    from seatrack.api.ais import ais
-    from seatrack.api.evaluate import evaluate
-    from seatrack.api.fuse import fuse
-    from seatrack.api.navigate import navigate
-    from seatrack.api.sensor import Sensor
-    from seatrack.api.simulate import simulate
-    from seatrack.api.tma import TMAResult
-    from seatrack.api.tma import tma
-    from seatrack.api.track import track
-    from seatrack.errors import UserError
+    from seatrack.api.ais import ais as ais
+    from seatrack.api.evaluate import evaluate as evaluate
+    from seatrack.api.fuse import fuse as fuse
+    from seatrack.api.navigate import navigate as navigate
+    from seatrack.api.sensor import Sensor as Sensor
+    from seatrack.api.simulate import simulate as simulate
+    from seatrack.api.tma import TMAResult as TMAResult
+    from seatrack.api.tma import tma as tma
+    from seatrack.api.track import track as track
+    from seatrack.errors import UserError as UserError
 
 
 def _function_over_package(name: str) -> property:

@@ -33,6 +33,7 @@ import dataclasses
 import functools
 import math
 import tomllib
+from collections.abc import Callable
 from collections.abc import Hashable
 from collections.abc import Iterable
 from collections.abc import Mapping
@@ -40,6 +41,8 @@ from pathlib import Path
 from typing import Any
 from typing import TypeVar
 from typing import get_type_hints
+
+import numpy as np
 
 from seatrack.errors import UserError
 from seatrack.geometry import G0
@@ -55,6 +58,9 @@ __all__ = [
     "load_toml",
     "to_edge",
     "check_fields",
+    "require",
+    "is_positive_number",
+    "is_positive_integer",
     "Checked",
 ]
 
@@ -254,6 +260,49 @@ def check_fields(config: Any) -> None:
             raise ConfigError(f"{where}: must be {op} {lo:g} {unit}".rstrip() + f", got {shown}")
         if hi is not None and v > hi * factor:
             raise ConfigError(f"{where}: must be <= {hi:g} {unit}".rstrip() + f", got {shown}")
+
+
+def require(
+    config: object,
+    names: Iterable[str],
+    test: Callable[[Any], bool],
+    rule: str,
+    *,
+    prefix: str = "",
+) -> None:
+    """Check fields of a config instance against one rule (a constraint :func:`param`
+    bounds do not state, or a config that does not use :func:`param`).
+
+    Parameters
+    ----------
+    config : the instance (usually ``self`` in ``__post_init__``).
+    names : the fields to check, in order.
+    test : true for a valid value (a NaN should fail it: write ``v > 0``, not
+        ``not v <= 0``).
+    rule : what a valid value is, for the message (``"> 0"``, ``"in (0, 1)"``...).
+    prefix : start of the message, e.g. the class name and a dot.
+
+    Raises
+    ------
+    ValueError
+        ``{prefix}{name} must be {rule}, got {value}`` for the first field that fails
+        ``test`` (:func:`parse_config` prefixes the source).
+    """
+    for name in names:
+        value = getattr(config, name)
+        if not test(value):
+            raise ValueError(f"{prefix}{name} must be {rule}, got {value}")
+
+
+def is_positive_number(v: float) -> bool:
+    """A finite number > 0 (NaN and infinity fail): a ``test`` of :func:`require`."""
+    return bool(np.isfinite(v) and v > 0)
+
+
+def is_positive_integer(v: float) -> bool:
+    """A whole number >= 1 (``int(v)`` raises for NaN and infinity): a ``test`` of
+    :func:`require`."""
+    return bool(int(v) == v and v >= 1)
 
 
 class Checked:

@@ -73,6 +73,9 @@ from numpy.typing import NDArray
 from scipy.stats import chi2
 
 from seatrack.config import Checked
+from seatrack.config import is_positive_integer
+from seatrack.config import is_positive_number
+from seatrack.config import require
 from seatrack.geometry import angle_diff
 from seatrack.geometry import bearing
 from seatrack.geometry import polar_to_cart
@@ -152,20 +155,16 @@ class SonarModel:
     init_inflation: float = 4.0
 
     def __post_init__(self) -> None:
-        if int(self.init_plots) != self.init_plots or self.init_plots < 1:
-            raise ValueError(f"init_plots must be a positive integer, got {self.init_plots}")
-        for name in (
+        require(self, ("init_plots",), is_positive_integer, "a positive integer")
+        positive = (
             "sigma_range",
             "sigma_bearing",
             "init_sigma_v",
             "init_sigma_acc",
             "init_inflation",
-        ):
-            v = getattr(self, name)
-            if not np.isfinite(v) or v <= 0:
-                raise ValueError(f"{name} must be a positive number, got {v}")
-        if not np.isfinite(self.sigma_a) or self.sigma_a < 0:
-            raise ValueError(f"sigma_a must be >= 0, got {self.sigma_a}")
+        )
+        require(self, positive, is_positive_number, "a positive number")
+        require(self, ("sigma_a",), lambda v: np.isfinite(v) and v >= 0, ">= 0")
 
     @property
     def order(self) -> int:
@@ -223,16 +222,13 @@ class RobustConfig(Checked):
 
     def __post_init__(self) -> None:
         super().__post_init__()
-        for name in ("delta_range", "delta_bearing", "l_factor_range", "l_factor_bearing"):
-            v = getattr(self, name)
-            if not np.isfinite(v) or v <= 0:
-                raise ValueError(f"{name} must be a positive number, got {v}")
-        if int(self.window) != self.window or self.window < 1:
-            raise ValueError(f"window must be a positive integer, got {self.window}")
-        for name in ("delta_sum_range", "delta_sum_bearing"):
-            v = getattr(self, name)
-            if v is not None and (not np.isfinite(v) or v <= 0):
-                raise ValueError(f"{name} must be a positive number or None, got {v}")
+        positive = ("delta_range", "delta_bearing", "l_factor_range", "l_factor_bearing")
+        require(self, positive, is_positive_number, "a positive number")
+        require(self, ("window",), is_positive_integer, "a positive integer")
+        sums = ("delta_sum_range", "delta_sum_bearing")
+        require(
+            self, sums, lambda v: v is None or is_positive_number(v), "a positive number or None"
+        )
 
     @cached_property
     def delta(self) -> FloatArray:

@@ -39,6 +39,9 @@ from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 from scipy.special import erfc
 
+from seatrack.config import is_positive_integer
+from seatrack.config import is_positive_number
+from seatrack.config import require
 from seatrack.filters.robust import SonarModel
 from seatrack.filters.robust import TrackEstimates
 from seatrack.filters.robust import axis_noise
@@ -95,10 +98,8 @@ class HuberConfig:
     prior_first: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
-        if not np.isfinite(self.c) or self.c <= 0:
-            raise ValueError(f"c must be a positive number, got {self.c}")
-        if int(self.iterations) != self.iterations or self.iterations < 1:
-            raise ValueError(f"iterations must be a positive integer, got {self.iterations}")
+        require(self, ("c",), is_positive_number, "a positive number")
+        require(self, ("iterations",), is_positive_integer, "a positive integer")
 
     def weights(
         self, e: FloatArray, H: FloatArray, P: FloatArray, r_nom: FloatArray
@@ -136,10 +137,8 @@ class StudentTConfig:
     prior_first: ClassVar[bool] = False
 
     def __post_init__(self) -> None:
-        if not np.isfinite(self.nu) or self.nu <= 0:
-            raise ValueError(f"nu must be a positive number, got {self.nu}")
-        if int(self.iterations) != self.iterations or self.iterations < 1:
-            raise ValueError(f"iterations must be a positive integer, got {self.iterations}")
+        require(self, ("nu",), is_positive_number, "a positive number")
+        require(self, ("iterations",), is_positive_integer, "a positive integer")
 
     def weights(
         self, e: FloatArray, H: FloatArray, P: FloatArray, r_nom: FloatArray

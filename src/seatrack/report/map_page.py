@@ -42,6 +42,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.config import require
 from seatrack.report.decimate import budget_tolerance
 from seatrack.report.decimate import dp_ranks
 from seatrack.report.decimate import mercator_rows
@@ -95,11 +96,10 @@ class MapOptions:
     percentile: float = 1.0
 
     def __post_init__(self) -> None:
-        for name in ("max_vertices", "max_reports", "max_outliers", "max_land_vertices"):
-            if getattr(self, name) < 0:
-                raise ValueError(f"MapOptions.{name} must be >= 0, got {getattr(self, name)}")
-        if not 0.0 <= self.percentile < 50.0:
-            raise ValueError(f"MapOptions.percentile must be in [0, 50), got {self.percentile}")
+        own = "MapOptions."
+        budgets = ("max_vertices", "max_reports", "max_outliers", "max_land_vertices")
+        require(self, budgets, lambda n: n >= 0, ">= 0", prefix=own)
+        require(self, ("percentile",), lambda p: 0.0 <= p < 50.0, "in [0, 50)", prefix=own)
 
 
 def robust_bounds(

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 from numpy.typing import NDArray
 
+from seatrack.config import require
 from seatrack.geometry import G0
 from seatrack.geometry import wrap_2pi
 
@@ -56,9 +57,7 @@ class Leg:
             raise ValueError(
                 f"leg duration must be a positive number of seconds, got {self.duration}"
             )
-        for name in ("turn_rate", "accel", "climb_rate"):
-            if not np.isfinite(getattr(self, name)):
-                raise ValueError(f"leg {name} must be finite, got {getattr(self, name)}")
+        require(self, ("turn_rate", "accel", "climb_rate"), np.isfinite, "finite", prefix="leg ")
 
     @classmethod
     def straight(cls, duration: float, climb_rate: float = 0.0) -> Leg:

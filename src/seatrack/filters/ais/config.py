@@ -7,6 +7,8 @@ from functools import lru_cache
 
 from scipy.stats import chi2
 
+from seatrack.config import require
+
 __all__ = ["AisTrackerConfig", "NX", "chi2_quantile", "trim_scale", "CHI2_1_MEDIAN"]
 
 NX = 5  # [x, y, vx, vy, w]
@@ -181,13 +183,11 @@ class AisTrackerConfig:
     max_turn_rate_dps: float = 12.0
 
     def __post_init__(self) -> None:
-        for name in ("sigma_pos_m", "q_accel", "q_turn", "max_speed_kn", "max_accel_mps2"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"AisTrackerConfig.{name} must be > 0, got {getattr(self, name)}")
-        if not 0.0 < self.gate_probability < 1.0:
-            raise ValueError(f"gate_probability must be in (0, 1), got {self.gate_probability}")
-        if self.reinit_after < 1:
-            raise ValueError(f"reinit_after must be >= 1, got {self.reinit_after}")
+        own = "AisTrackerConfig."
+        positive = ("sigma_pos_m", "q_accel", "q_turn", "max_speed_kn", "max_accel_mps2")
+        require(self, positive, lambda v: v > 0, "> 0", prefix=own)
+        require(self, ("gate_probability",), lambda p: 0.0 < p < 1.0, "in (0, 1)")
+        require(self, ("reinit_after",), lambda n: n >= 1, ">= 1")
         if not 0.0 < self.sigma_pos_min_m <= self.sigma_pos_m:
             raise ValueError(
                 f"need 0 < sigma_pos_min_m <= sigma_pos_m, got {self.sigma_pos_min_m}, "
@@ -198,16 +198,17 @@ class AisTrackerConfig:
                 f"need 0 <= sigma_time_min_s <= noise_max_time_s, got {self.sigma_time_min_s}, "
                 f"{self.noise_max_time_s}"
             )
-        if not 0.0 < self.noise_trim <= 1.0:
-            raise ValueError(f"noise_trim must be in (0, 1], got {self.noise_trim}")
-        for name in ("sigma_time_fine_s", "steady_nis_ratio", "max_turn_rate_dps"):
-            if not getattr(self, name) > 0:
-                raise ValueError(f"AisTrackerConfig.{name} must be > 0, got {getattr(self, name)}")
-        for name in ("max_time_offset_s", "offset_passes", "q_accel_steady"):
-            if not getattr(self, name) >= 0:
-                raise ValueError(f"AisTrackerConfig.{name} must be >= 0, got {getattr(self, name)}")
-        if not 0.0 <= self.min_offset_share < 1.0:
-            raise ValueError(f"min_offset_share must be in [0, 1), got {self.min_offset_share}")
+        require(self, ("noise_trim",), lambda p: 0.0 < p <= 1.0, "in (0, 1]")
+        require(
+            self,
+            ("sigma_time_fine_s", "steady_nis_ratio", "max_turn_rate_dps"),
+            lambda v: v > 0,
+            "> 0",
+            prefix=own,
+        )
+        non_negative = ("max_time_offset_s", "offset_passes", "q_accel_steady")
+        require(self, non_negative, lambda v: v >= 0, ">= 0", prefix=own)
+        require(self, ("min_offset_share",), lambda p: 0.0 <= p < 1.0, "in [0, 1)")
 
     @property
     def gate(self) -> float:

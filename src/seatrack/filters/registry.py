@@ -61,6 +61,7 @@ from seatrack.filters.base import SensorNoise
 from seatrack.filters.base import plot_gaussian
 from seatrack.filters.driver import GROSS_NIS
 from seatrack.filters.driver import run_tracks
+from seatrack.progress import Progress
 
 if TYPE_CHECKING:
     from seatrack.models.targets import TargetClass
@@ -379,9 +380,14 @@ def track_index(labels: NDArray[Any]) -> tuple[NDArray[np.int64], list[str]]:
 
 
 def run(
-    name: str, plots: Plots, table: Mapping[str, Any] | None = None, source: str = "config"
+    name: str,
+    plots: Plots,
+    table: Mapping[str, Any] | None = None,
+    source: str = "config",
+    progress: Progress | None = None,
 ) -> dict[str, NDArray[Any]]:
-    """Run method ``name`` over every labelled track of ``plots`` (one batch per step).
+    """Run method ``name`` over every labelled track of ``plots`` (one batch per step;
+    ``progress`` is told of the plots done).
 
     Returns the output columns (one value per plot, input order):
     :data:`COMMON_COLUMNS`, ``status``, ``nis``, then the method's own columns.
@@ -390,7 +396,7 @@ def run(
     ti, _ = track_index(labels)
     m = build(name, table, d=plots.d, range_rate=plots.has_range_rate, source=source)
     gate = math.inf if name.endswith("-spec") else GROSS_NIS
-    cols = run_tracks(m.filter, m.prepare(plots), ti, m.initiate, gate=gate)
+    cols = run_tracks(m.filter, m.prepare(plots), ti, m.initiate, gate=gate, progress=progress)
     first = [*COMMON_COLUMNS, "status", "nis"]
     return {c: cols[c] for c in first} | {c: v for c, v in cols.items() if c not in first}
 

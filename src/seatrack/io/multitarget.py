@@ -50,6 +50,7 @@ from seatrack.io.table import check_input_file
 from seatrack.io.table import check_times
 from seatrack.io.table import decode_text
 from seatrack.io.table import read_csv_table
+from seatrack.progress import Progress
 from seatrack.tracking import Tracker
 from seatrack.tracking import TrackerConfig
 from seatrack.tracking import TrackerRun
@@ -362,15 +363,17 @@ def run_unlabelled(
     association: str | None = None,
     all_tracks: bool = False,
     associator: Associator | None = None,
+    progress: Progress | None = None,
 ) -> UnlabelledRun:
     """The multi-target tracker of ``seatrack track`` on unlabelled plots: the per-track
     filter of :func:`make_filter` (automatic noise levels), the sensor noise and tracker
     keys of ``table``; ``rows`` of the result is the number of TRACKS rows. ``associator``
-    replaces the configured association role (:class:`seatrack.tracking.roles.Associator`)."""
+    replaces the configured association role (:class:`seatrack.tracking.roles.Associator`);
+    ``progress`` is told of the plots done after every scan."""
     tcfg, sensor, m_tab = tracker_setup(table, source, association)
     flt, noise = make_filter(method, m_tab, plots, source, tcfg)
     tracker = Tracker(flt.filter, associator=associator, sensor=sensor, config=tcfg)
-    run = tracker.run(flt.prepare(plots), all_tracks=all_tracks)
+    run = tracker.run(flt.prepare(plots), all_tracks=all_tracks, progress=progress)
     return UnlabelledRun(plots, run, tracker, int(run.t.size), noise)
 
 

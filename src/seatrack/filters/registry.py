@@ -371,12 +371,36 @@ def build(
 
 
 def track_index(labels: NDArray[Any]) -> tuple[NDArray[np.int64], list[str]]:
-    """Track number ``0..T-1`` of each plot (in order of first appearance) and the labels."""
-    names, first, inv = np.unique(labels, return_index=True, return_inverse=True)
-    order = np.argsort(first, kind="stable")
-    rank = np.empty(order.size, np.int64)
-    rank[order] = np.arange(order.size)
-    return rank[inv.reshape(-1)], [str(n) for n in names[order]]
+    """Track number ``0..T-1`` of each plot (in order of first appearance) and the labels.
+
+    ``labels`` are text (a fixed-width or an object array, :func:`compact_labels`); one
+    hashing pass (pyarrow's dictionary encoding), no sort of the texts."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    values = np.asarray(labels).ravel()
+    if values.size == 0:
+        return np.zeros(0, np.int64), []
+    try:
+        enc = pc.dictionary_encode(pa.array(values))
+    except (pa.ArrowException, TypeError, ValueError):  # labels of mixed types: sort them
+        names, first, inv = np.unique(values.astype(str), return_index=True, return_inverse=True)
+        order = np.argsort(first, kind="stable")
+        rank = np.empty(order.size, np.int64)
+        rank[order] = np.arange(order.size)
+        return rank[inv.reshape(-1)], [str(n) for n in names[order]]
+    codes = enc.indices.to_numpy(zero_copy_only=False).astype(np.int64)
+    return codes, [str(n) for n in enc.dictionary.to_pylist()]
+
+
+def compact_labels(labels: NDArray[Any]) -> NDArray[np.object_]:
+    """``labels`` as an object array holding one ``str`` per distinct value: 8 bytes per
+    row and the distinct texts once (a fixed-width array takes 4 bytes per character of
+    the longest text on every row). Same values, same comparisons."""
+    codes, names = track_index(labels)
+    table = np.empty(len(names), dtype=object)
+    table[:] = names
+    return np.asarray(table[codes])
 
 
 def run(

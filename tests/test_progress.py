@@ -13,8 +13,8 @@ import shutil
 
 import numpy as np
 import pytest
-from tests.cli_inprocess import seatrack
 
+from cli_inprocess import seatrack
 from seatrack.data import ais_sample
 from seatrack.progress import Progress
 from seatrack.progress import format_duration

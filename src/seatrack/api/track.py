@@ -193,26 +193,28 @@ def run_track(
 ) -> TrackRun:
     """Read ``plots`` and run ``method`` on them as ``seatrack track`` does (labelled or
     unlabelled by the ``track`` column)."""
+    from seatrack.filters.registry import check_range_rate
     from seatrack.filters.registry import run
     from seatrack.io.multitarget import has_track_column
-    from seatrack.io.multitarget import read_unlabelled_plots
-    from seatrack.io.multitarget import run_unlabelled
-    from seatrack.io.multitarget import tracker_setup
+    from seatrack.io.multitarget import track_unlabelled_file
     from seatrack.io.plots import read_plots
+    from seatrack.progress import Progress
 
     check_method(method)  # unknown method: fail before any work
     tab = dict(table or {})
     with as_file(plots, "plots") as path:
         if not has_track_column(path):
-            tracker_setup(tab, source, association)  # configuration errors before the plots
-            p = read_unlabelled_plots(path)
-            bar = track_progress(len(p), UNLABELLED_SECONDS_PER_PLOT)
-            res = run_unlabelled(
-                p, method, tab, source, association, all_tracks, associator, progress=bar
-            )
-            return TrackRun(method, p, tracker=res)
+            res = track_unlabelled_file(path, method, tab, source, association, all_tracks,
+                                        associator)  # fmt: skip
+            return TrackRun(method, res.plots, tracker=res)
         p = read_plots(path)
-    bar = track_progress(len(p), LABELLED_SECONDS_PER_PLOT.get(method, DEFAULT_SECONDS_PER_PLOT))
+        check_range_rate(
+            method,
+            p.has_range_rate,
+            str(plots) if isinstance(plots, (str, os.PathLike)) else "plots",
+        )
+    rate = LABELLED_SECONDS_PER_PLOT.get(method, DEFAULT_SECONDS_PER_PLOT)
+    bar = Progress("seatrack track", len(p), "plots", len(p) * rate)
     return TrackRun(method, p, columns=run(method, p, tab, source=source, progress=bar))
 
 
@@ -222,16 +224,6 @@ def run_track(
 LABELLED_SECONDS_PER_PLOT = {"turning": 8.5e-5, "robust-adaptive": 7e-5}
 #: the same for every other method (the imm's figure, rounded up)
 DEFAULT_SECONDS_PER_PLOT = 2.5e-5
-#: seconds per plot of the multi-target tracker (ekf, GNN: 6.2-6.9 s for 1,000 scans of 100
-#: targets and 100 clutter plots, ``seatrack track``, the same machine and load)
-UNLABELLED_SECONDS_PER_PLOT = 3.5e-5
-
-
-def track_progress(n_plots: int, seconds_per_plot: float) -> Any:
-    """The :class:`seatrack.progress.Progress` of tracking ``n_plots`` plots."""
-    from seatrack.progress import Progress
-
-    return Progress("seatrack track", n_plots, "plots", n_plots * seconds_per_plot)
 
 
 def track(

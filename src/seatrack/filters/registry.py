@@ -54,6 +54,7 @@ from numpy.typing import NDArray
 from seatrack.config import ConfigError
 from seatrack.config import config_keys
 from seatrack.config import parse_config
+from seatrack.errors import InputError
 from seatrack.filters.base import COMMON_COLUMNS
 from seatrack.filters.base import Plots
 from seatrack.filters.base import RecursiveFilter
@@ -368,6 +369,18 @@ def build(
         return plot_gaussian(p, sensor, speed, use_rr)
 
     return Method(name, flt, initiate, dd != d)
+
+
+def check_range_rate(name: str, has_range_rate: bool, where: str) -> None:
+    """Refuse plots without range rate for a method that needs it (``where``: the file).
+
+    Raises
+    ------
+    InputError
+        ``WHERE: method NAME needs a range_rate_mps column in the plots``.
+    """
+    if getattr(method_class(name), "needs_range_rate", False) and not has_range_rate:
+        raise InputError(f"{where}: method {name} needs a range_rate_mps column in the plots")
 
 
 def track_index(labels: NDArray[Any]) -> tuple[NDArray[np.int64], list[str]]:

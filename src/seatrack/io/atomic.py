@@ -18,8 +18,9 @@ a half-written file.
   open, :func:`atomic_path` keeps each finished temporary instead of moving it; they all
   replace their destinations when the block ends without an error, and are all removed
   when it ends with one (a full disk on the last output, an interrupt). The ``seatrack``
-  command line runs every command inside one (the demo, which reads back the data files
-  it writes, opts out with :func:`immediate_outputs`).
+  command line runs every command inside one; a file read back before the end is found
+  with :func:`pending_output`, and worker processes hand their outputs to the parent's
+  transaction with :func:`held_outputs` / :func:`adopt_outputs`.
 
 Output paths: an existing output must be a regular file (a device node, a pipe or a socket
 is refused: replacing ``/dev/null`` with a regular file is never what was meant). An output
@@ -38,6 +39,7 @@ import os
 import secrets
 import tempfile
 from collections.abc import Iterator
+from collections.abc import Mapping
 from pathlib import Path
 from typing import IO
 from typing import Any
@@ -54,6 +56,9 @@ __all__ = [
     "output_transaction",
     "pending_output",
     "immediate_outputs",
+    "held_outputs",
+    "adopt_outputs",
+    "discard_outputs",
     "TEMP_NAME_EXTRA",
 ]
 
@@ -372,6 +377,45 @@ def output_transaction() -> Iterator[None]:
             outer.add(tmp, dest)
         return
     tx.commit()
+
+
+@contextlib.contextmanager
+def held_outputs() -> Iterator[dict[Path, Path]]:
+    """Outputs written inside the block kept as finished temporaries and handed over
+    (destination -> temporary) instead of replacing their files: a worker process writes
+    its part of a command's outputs this way and its parent adds them to its transaction
+    with :func:`adopt_outputs` (or removes them with :func:`discard_outputs`). An error
+    inside the block removes the temporaries, as :func:`output_transaction` does."""
+    tx = _Transaction()
+    _TRANSACTIONS.append(tx)
+    held: dict[Path, Path] = {}
+    try:
+        yield held
+    except BaseException:
+        _TRANSACTIONS.remove(tx)
+        tx.discard()
+        raise
+    _TRANSACTIONS.remove(tx)
+    held.update(tx.pending)
+    tx.pending.clear()
+
+
+def adopt_outputs(held: Mapping[Path, Path]) -> None:
+    """Outputs held by :func:`held_outputs` (in this or a worker process) added to the open
+    :func:`output_transaction`; without one they replace their files at once."""
+    tx = _active()
+    for dest, tmp in held.items():
+        if tx is None or tx.direct:
+            os.replace(tmp, dest)
+        else:
+            tx.add(Path(tmp), Path(dest))
+
+
+def discard_outputs(held: Mapping[Path, Path]) -> None:
+    """Remove the temporaries of outputs held by :func:`held_outputs`."""
+    for tmp in held.values():
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
 
 
 @contextlib.contextmanager

@@ -421,8 +421,8 @@ def discard_outputs(held: Mapping[Path, Path]) -> None:
 @contextlib.contextmanager
 def immediate_outputs() -> Iterator[None]:
     """Inside an :func:`output_transaction`, a block whose outputs replace their files at
-    once, as without a transaction: for a command that reads back what it wrote (the demo
-    writes its data files, then tracks them)."""
+    once, as without a transaction (a library caller that must see a file in place
+    before the end; commands read back what they wrote with :func:`pending_output`)."""
     tx = _Transaction(direct=True)
     _TRANSACTIONS.append(tx)
     try:

@@ -2,7 +2,7 @@
 
 Layers point one way (a module imports only from its own layer or lower ones)::
 
-    0  geometry, kalman, models, config, information, jit, data, errors   (foundations)
+    0  geometry, kalman, models, config, information, jit, data, errors, progress   (foundations)
     1  filters, tma, navigation                    (estimators)
     2  tracking                                    (multi-target tracking)
     3  io                                          (file formats: readers and writers)
@@ -47,6 +47,7 @@ LAYERS: dict[str, int] = {
     "jit": 0,
     "data": 0,
     "errors": 0,
+    "progress": 0,
     "filters": 1,
     "tma": 1,
     "navigation": 1,

@@ -73,3 +73,43 @@ def test_report_opens_in_headless_chromium(demo, tmp_path):
 
     px = np.asarray(Image.open(shot).convert("L"), dtype=float)
     assert px.std() > 20  # text, tables and plots drawn, not a blank page
+
+
+def _written_section(out: Path, runs: int) -> Any:
+    from seatrack.io.atomic import atomic_write
+    from seatrack.report.demo import Section
+
+    with atomic_write(out / "turns.png", "wb") as fh:
+        fh.write(b"new picture")
+    return Section("turns", "t", "s", figure=out / "turns.png")
+
+
+def _failing_section(out: Path, runs: int) -> Any:
+    from seatrack.io.atomic import atomic_write
+
+    with atomic_write(out / "data" / "plots_unlabelled.csv") as fh:
+        fh.write("new\n")
+    raise KeyboardInterrupt  # an interrupt once other outputs are written
+
+
+@pytest.mark.parametrize("processes", ["1", "2"])
+def test_a_failure_midway_keeps_every_previous_output(tmp_path, monkeypatch, processes):
+    """All outputs of the demo are one transaction (sections in worker processes
+    included): an interrupt in the last section keeps every previous file, leaves no
+    temporary, and prints one line."""
+    import seatrack.report.demo as demo_module
+
+    monkeypatch.setattr(
+        demo_module, "SECTIONS", {"turns": _written_section, "multitarget": _failing_section}
+    )
+    out = tmp_path / "out"
+    (out / "data").mkdir(parents=True)
+    previous = [out / "turns.png", out / "results.txt", out / "data" / "plots_radar.csv",
+                out / "data" / "plots_unlabelled.csv"]  # fmt: skip
+    for p in previous:
+        p.write_text("previous\n")
+    res = seatrack("demo", "--out", out, "--runs", "1", "--processes", processes)
+    assert res.returncode != 0 and res.stderr.strip().splitlines() == ["error: interrupted"]
+    assert [p.read_text() for p in previous] == ["previous\n"] * len(previous)
+    assert not (out / "report.html").exists()
+    assert not [p for p in out.rglob(".*")]  # no temporaries left

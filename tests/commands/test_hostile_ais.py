@@ -28,6 +28,8 @@ from pyais.encode import encode_dict
 from ais_samples import data_file
 from seatrack.io.ais import format_times
 from seatrack.io.ais import read_ais_csv
+from seatrack.io.ais.columnar import detect_schema
+from seatrack.io.table import InputError
 from seatrack.io.table import decode_text
 
 SAMPLE = data_file("dk_gothenburg_20170705_cpa.csv")
@@ -52,15 +54,21 @@ NMEA_TEXT = nmea_text()
 
 
 def _records(data: bytes, nmea: bool) -> int:
-    """Input records as a reader sees them: physical lines (NMEA) or CSV records after the
-    header (a quoted field may span lines)."""
+    """Input records as the reader accounts for them: every physical line (universal line
+    ends: LF, CRLF, CR, as the reader and Python's text files), less a CSV file's first
+    line when it is a header of a known schema. A quote never joins two lines: a CSV file
+    that is not one row per line is read line by line (docs/ais.md), so a stray ``"``
+    cell leaves every later line a row of its own."""
     text, _ = decode_text(plain(data))
-    if nmea:  # universal line ends (LF, CRLF, CR), as the reader and Python's text files
-        return len(io.StringIO(text, newline=None).readlines())
+    lines = io.StringIO(text, newline=None).readlines()
+    if nmea or not lines:
+        return len(lines)
+    first = next(csv.reader([lines[0].rstrip("\r\n")]), [])
     try:
-        return max(len(list(csv.reader(io.StringIO(text, newline="")))) - 1, 0)
-    except csv.Error:
-        return -1
+        detect_schema([f.strip() for f in first])
+    except InputError:
+        return len(lines)  # no header: the first line is a row (rejected) too
+    return len(lines) - 1
 
 
 def _run(d: Path, data: bytes, name: str, *extra: object) -> tuple[int, int, int]:

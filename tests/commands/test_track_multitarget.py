@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from cli_inprocess import seatrack
-from seatrack.io.multitarget import track_unlabelled
 from seatrack.io.multitarget import write_unlabelled_plots
 from seatrack.simulate.multitarget import TargetPopulation
 from seatrack.simulate.multitarget import simulate_multitarget
@@ -87,13 +86,15 @@ def test_errors_are_one_line(tmp_path):
     r = _seatrack("track", "plots.csv", "-o", "t.csv", "--association", "mht", cwd=tmp_path)
     assert r.returncode == 2 and r.stderr.startswith("error: --association")
     (tmp_path / "c.toml").write_text("m_of_n = [5, 2]\n")
-    with pytest.raises(ValueError, match="c.toml: m_of_n"):
-        track_unlabelled(tmp_path / "plots.csv", tmp_path / "t.csv", config=tmp_path / "c.toml")
-    with pytest.raises(ValueError, match="needs a range_rate_mps column"):
-        track_unlabelled(tmp_path / "plots.csv", tmp_path / "t.csv", method="mm-rangerate")
     (tmp_path / "q.toml").write_text("[sensor]\nsigma_range_m = -1\n")
-    with pytest.raises(ValueError, match="q.toml: sigma_range_m"):
-        track_unlabelled(tmp_path / "plots.csv", tmp_path / "t.csv", config=tmp_path / "q.toml")
+    for args, message in (
+        (("--config", "c.toml"), "c.toml: m_of_n"),
+        (("--method", "mm-rangerate"), "needs a range_rate_mps column"),
+        (("--config", "q.toml"), "q.toml: sigma_range_m"),
+    ):
+        r = _seatrack("track", "plots.csv", "-o", "t.csv", *args, cwd=tmp_path)
+        assert r.returncode == 2 and message in r.stderr, r.stderr
+        assert len(r.stderr.splitlines()) == 1
     (tmp_path / "bad.csv").write_text("time_s,range_m,azimuth_deg\n0,100,10\n0,-1,10\n")
     r = _seatrack("track", "bad.csv", "-o", "t.csv", cwd=tmp_path)
     assert r.returncode == 2 and "bad.csv, line 3: range_m must be > 0" in r.stderr

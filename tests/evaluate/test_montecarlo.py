@@ -11,6 +11,7 @@ from seatrack.evaluate.montecarlo import format_table
 from seatrack.evaluate.montecarlo import monte_carlo
 from seatrack.evaluate.montecarlo import rich_table
 from seatrack.evaluate.montecarlo import run_seeds
+from seatrack.progress import Progress
 
 
 def draw(rng, run, size=3):
@@ -40,12 +41,14 @@ def test_reproducible_and_independent_of_process_count():
     assert len({tuple(r) for r in a["x"]}) == 8
 
 
-def test_partial_functions_and_progress_bar():
+def test_partial_functions_and_progress():
     fn = functools.partial(draw, size=2)
-    res = monte_carlo(fn, 3, seed=1, processes=2, progress=True)
+    bar = Progress("mc", 3, "runs", 0.0, shown=False)
+    res = monte_carlo(fn, 3, seed=1, processes=2, progress=bar)
     ref = monte_carlo(fn, 3, seed=1)
     np.testing.assert_array_equal(res["x"], ref["x"])
     assert res["x"].shape == (3, 2)
+    assert bar.done == 3  # told of every run
 
 
 def ragged(rng, run):

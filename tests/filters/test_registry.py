@@ -266,3 +266,17 @@ def test_config_built_directly_rejects_bad_noise(name, field, key, bad):
     config = registry.method_class(name).Config
     with pytest.raises(ValueError, match=rf"\b{key}\b"):
         config(**{field: bad})
+
+
+def test_track_index_and_compact_labels_keep_first_appearance_order():
+    from seatrack.filters.registry import compact_labels
+    from seatrack.filters.registry import track_index
+
+    labels = np.array(["b", "a", "b", "c", "a"])
+    codes, names = track_index(labels)
+    assert codes.tolist() == [0, 1, 0, 2, 1] and names == ["b", "a", "c"]
+    compact = compact_labels(labels)
+    assert compact.dtype == object and compact.tolist() == labels.tolist()
+    assert compact[0] is compact[2]
+    assert track_index(np.array([3, 1, 3]))[1] == ["3", "1"]  # not text: as text
+    assert track_index(np.array([], dtype=str))[0].size == 0

@@ -122,3 +122,28 @@ def test_binary_file_is_refused_with_a_printable_header(tmp_path):
     with pytest.raises(InputError, match="not a recognised AIS CSV header") as ei:
         read_ais_csv(p)
     assert str(ei.value).isprintable()
+
+
+@pytest.mark.parametrize("column", [0, 2])  # mmsi, lat
+def test_a_very_long_cell_is_one_rejected_row_not_a_wide_copy_of_every_row(tmp_path, column):
+    """A 300,000-character text cell: its row is rejected with its line, the others read as
+    without it, and the cells are held as objects (it took 24 GB as fixed-width text)."""
+    from seatrack.io.ais.columnar import TOO_LONG
+    from seatrack.io.ais.columnar import bounded_cell
+    from seatrack.io.ais.read import read_file
+
+    src = data_file("no_vestland_20220901.csv").read_text().splitlines()[:201]
+    cells = src[50].split(",")
+    cells[column] = "x" * 300_000
+    bad = tmp_path / "long.csv"
+    bad.write_text("\n".join([*src[:50], ",".join(cells), *src[51:]]) + "\n")
+    good = tmp_path / "good.csv"
+    good.write_text("\n".join(src) + "\n")
+    r, ref = read_file(bad), read_file(good)
+    assert len(r) == len(ref) == 200
+    row = int(np.flatnonzero(r.line == 51)[0])
+    assert r.code[row] != 0 and ref.code[row] == 0  # the long cell's row is rejected
+    keep = np.arange(len(r)) != row
+    np.testing.assert_array_equal(r.mmsi[keep], ref.mmsi[keep])
+    np.testing.assert_array_equal(r.lat[keep], ref.lat[keep])
+    assert bounded_cell("x" * 101) == TOO_LONG and bounded_cell("x" * 100) == "x" * 100

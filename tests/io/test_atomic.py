@@ -168,3 +168,84 @@ def test_probe_leaves_nothing_and_temporary_failure_names_the_destination(tmp_pa
         with atomic_write(out) as fh:
             fh.write("x")
     assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.parametrize("fail_at", [1, 2])
+def test_a_rename_failing_midway_puts_back_the_outputs_already_replaced(
+    tmp_path, monkeypatch, fail_at
+):
+    paths = [tmp_path / "a.csv", tmp_path / "b.csv", tmp_path / "new.csv"]
+    paths[0].write_text("old a\n")
+    paths[1].write_text("old b\n")
+    real_replace = os.replace
+    calls = []
+
+    def replace(src, dst):  # the commit's renames of temporaries: the n-th one fails
+        if (
+            str(src).endswith(".csv")
+            and os.path.basename(str(src)).startswith(".")
+            and (os.path.basename(str(dst)) in ("a.csv", "b.csv", "new.csv"))
+        ):
+            calls.append(dst)
+            if len(calls) == fail_at + 1:
+                raise OSError(errno.EXDEV, "Invalid cross-device link")
+        real_replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", replace)
+    with pytest.raises(OutputError, match="cannot replace"):
+        with atomic.output_transaction():
+            for p, text in zip(paths, ("A\n", "B\n", "N\n"), strict=True):
+                with atomic_write(p) as fh:
+                    fh.write(text)
+    assert [p.read_text() for p in paths[:2]] == ["old a\n", "old b\n"]
+    assert not paths[2].exists()
+    assert sorted(os.listdir(tmp_path)) == ["a.csv", "b.csv"]  # no temporary, no backup
+
+
+def test_a_transaction_keeps_no_backup_after_success_or_interrupt(tmp_path, monkeypatch):
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    a.write_text("old a\n")
+    with atomic.output_transaction():
+        for p in (a, b):
+            with atomic_write(p) as fh:
+                fh.write(f"new {p.name}\n")
+    assert a.read_text() == "new a.csv\n" and b.read_text() == "new b.csv\n"
+    assert sorted(os.listdir(tmp_path)) == ["a.csv", "b.csv"]
+    real_replace = os.replace
+
+    fired = []
+
+    def interrupted(src, dst):  # one interrupt, while the second output is renamed
+        if os.path.basename(str(dst)) == "b.csv" and not fired:
+            fired.append(src)
+            raise KeyboardInterrupt
+        real_replace(src, dst)
+
+    monkeypatch.setattr(os, "replace", interrupted)
+    with pytest.raises(KeyboardInterrupt):
+        with atomic.output_transaction():
+            for p in (a, b):
+                with atomic_write(p) as fh:
+                    fh.write("newer\n")
+    assert a.read_text() == "new a.csv\n" and b.read_text() == "new b.csv\n"
+    assert sorted(os.listdir(tmp_path)) == ["a.csv", "b.csv"]
+
+
+def test_without_hard_links_the_previous_file_is_renamed_away_and_back(tmp_path, monkeypatch):
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    a.write_text("old a\n")
+    b.mkdir()  # the second output became a folder after the checks
+
+    def no_links(src, dst):
+        raise OSError(errno.EPERM, "Operation not permitted")
+
+    monkeypatch.setattr(os, "link", no_links)
+    with pytest.raises(OutputError, match="b.csv: cannot replace"):
+        with atomic.output_transaction():
+            with atomic_write(a) as fh:
+                fh.write("new\n")
+            tmp = tmp_path / ".b.csv.12345678.csv"
+            tmp.write_text("new b\n")
+            atomic._active().add(tmp, b)  # as atomic_path does after its checks
+    assert a.read_text() == "old a\n" and b.is_dir()
+    assert sorted(os.listdir(tmp_path)) == ["a.csv", "b.csv"]

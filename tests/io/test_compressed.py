@@ -64,3 +64,23 @@ def test_truncated_or_corrupt_data_name_the_file(tmp_path, cut):
     p.write_bytes(data[:30] + bytes(100) + data[130:])
     with pytest.raises(InputError, match=rf"^{p}: not valid gzip data"):
         read_input(p)
+
+
+def test_a_bomb_is_refused_from_its_first_megabytes_whatever_its_size(tmp_path):
+    """The ratio is that of the compressed bytes read so far, not of the whole file: a
+    3 GB bomb stops as early as a 60 MB one (the check every input gets before work)."""
+    from seatrack.io.compressed import PROBE_BYTES
+    from seatrack.io.compressed import check_ratio
+    from seatrack.io.table import check_input_file
+
+    p = tmp_path / "bomb.csv.gz"
+    p.write_bytes(gzip.compress(b"mmsi,time_utc\n" + bytes(60 << 20)))  # a header, then NULs
+    with pytest.raises(InputError, match="compression bomb") as exc:
+        check_ratio(p)
+    so_far = float(str(exc.value).split("(")[1].split(" MB so far")[0]) * 1e6
+    assert so_far <= PROBE_BYTES  # refused within the probe, long before the 60 MB
+    with pytest.raises(InputError, match=rf"^{p}: decompresses to more than"):
+        check_input_file(p)
+    ok = tmp_path / "ok.csv.gz"
+    ok.write_bytes(gzip.compress(b"".join(b"%d,2017-07-05T19:00:01Z\n" % k for k in range(200000))))
+    check_ratio(ok)  # a real file's ratio (about 10) passes

@@ -145,14 +145,16 @@ def _radar_file(path, seed):
 def test_every_registered_method_tracks_unlabelled_plots(tmp_path, method):
     """Any registered method is the per-track filter: tracks confirmed on every target,
     every plot accounted for, no NaN."""
-    from seatrack.io.multitarget import track_unlabelled
+    from cli_inprocess import seatrack
 
     sim = _radar_file(tmp_path / "plots.csv", seed=21)
     cfg = tmp_path / "radar.toml"
     cfg.write_text("[sensor]\nsigma_range_m = 15.0\nsigma_azimuth_deg = 0.3\n"
                    "sigma_range_rate_mps = 0.5\n")  # fmt: skip
-    line = track_unlabelled(tmp_path / "plots.csv", tmp_path / "t.csv", method, cfg,
-                            plots_out=tmp_path / "labels.csv")  # fmt: skip
+    res = seatrack("track", tmp_path / "plots.csv", "--out", tmp_path / "t.csv", "--method",
+                   method, "--config", cfg, "--plots-out", tmp_path / "labels.csv")  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    line = res.stdout.strip()
     assert line.startswith(f"{method} multi-target (gnn)")
     with open(tmp_path / "t.csv") as fh:
         rows = list(csv.DictReader(fh))

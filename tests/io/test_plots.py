@@ -54,3 +54,18 @@ def test_bad_plot_files(tmp_path, body, msg):
     p.write_text(body)
     with pytest.raises(InputError, match=msg):
         read_plots(p)
+
+
+def test_track_ids_are_stored_once_each_not_as_wide_as_the_longest(tmp_path):
+    from seatrack.io.plots import read_plots
+
+    long_id = "L" * 100
+    rows = ["track,time_s,range_m,azimuth_deg"]
+    for k in range(50):
+        rows += [f"a,{k},{1000 + k},10", f"{long_id},{k},{2000 + k},20"]
+    p = tmp_path / "p.csv"
+    p.write_text("\n".join(rows) + "\n")
+    labels = read_plots(p).track
+    assert labels.dtype == object  # 8 bytes per row, not 400 (a <U100 array)
+    assert labels.tolist() == ["a", long_id] * 50
+    assert len({id(s) for s in labels}) == 2  # one str object per distinct id

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 
+from cli_inprocess import seatrack
 from live.streams import RADAR_TOML
 from live.streams import plot_csv
 from live.streams import radar_scans
@@ -16,7 +17,6 @@ from live.streams import started
 from live.streams import udp_send
 from live.streams import wait_for
 from seatrack.io.asterix import encode_cat048
-from seatrack.io.multitarget import track_unlabelled
 from seatrack.io.radar import parse_radar_config
 from seatrack.live.counters import Counters
 from seatrack.live.process import LiveOptions
@@ -76,7 +76,8 @@ def batch_rows(tmp_path, lines):
     cfg = tmp_path / "track.toml"
     cfg.write_text("sigma_range_m = 15.0\nsigma_azimuth_deg = 0.3\n")
     out = tmp_path / "tracks.csv"
-    track_unlabelled(plots, out, "ekf", cfg)
+    res = seatrack("track", plots, "--method", "ekf", "--config", cfg, "--out", out)
+    assert res.returncode == 0, res.stderr
     with open(out) as fh:
         return [(float(r["time_s"]), int(r["track"]), r["status"], float(r["x_m"]),
                  float(r["y_m"]), float(r["vx_mps"]), float(r["vy_mps"]))

@@ -98,9 +98,13 @@ def track_to_files(
 
         summary = track_files_dask(inputs, out, cfg, scheduler=scheduler)
     else:
+        from seatrack.io.ais.pipeline import ais_progress
         from seatrack.io.ais.pipeline import track_files
 
-        summary = track_files(inputs, out, cfg, memory_limit=memory_limit, on_group=collect)
+        bar = ais_progress(inputs)
+        summary = track_files(
+            inputs, out, cfg, memory_limit=memory_limit, on_group=collect, progress=bar
+        )
     lines = summary.lines()
     from seatrack.io.atomic import atomic_path
 

@@ -158,13 +158,15 @@ def run_evaluation(
     from seatrack.evaluate.tracking import position_crb
     from seatrack.evaluate.tracking import require_evaluation
     from seatrack.evaluate.tracking import summarize
+    from seatrack.progress import Progress
 
     names = method_names(methods)
     n, s, sens = evaluation_options(sc, runs, seed, sensor, skip, processes)
-    require_evaluation(sc, sens, names, n, processes)
+    seconds = require_evaluation(sc, sens, names, n, processes)
     prepare_outputs(outputs, folders)
     errors = trial_errors(sc, sens, names, s)
-    res = compare_methods(sc, names, n, s, sensor=sens.name, processes=processes, progress=progress)
+    bar = Progress("seatrack evaluate", n, "runs", seconds, shown=progress)
+    res = compare_methods(sc, names, n, s, sensor=sens.name, processes=processes, progress=bar)
     dims = 3 if "elevation" in sens.components else 2
     crb = position_crb(sc, sens.name, names)
     rows = summarize(res, names, dims=dims, skip=skip, crb=crb)

@@ -140,9 +140,9 @@ def run_navigation(
     with contextlib.ExitStack() as stack:
         lm = read_map_csv(stack.enter_context(as_file(landmarks, "map")), origin)
         ech = read_echoes(stack.enter_context(as_file(echoes, "echoes")))
-        require_navigation(ech, cfg.antenna_period, cfg.steps_per_rev)  # the work budget
+        bar = require_navigation(ech, cfg.antenna_period, cfg.steps_per_rev)  # the budget
         gy = None if gyro is None else read_gyro(stack.enter_context(as_file(gyro, "gyro")))
-    return run(lm, ech, list(x0), cfg, gyro=gy)
+    return run(lm, ech, list(x0), cfg, gyro=gy, progress=bar)
 
 
 def navigate(

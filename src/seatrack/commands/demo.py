@@ -10,7 +10,10 @@ Writes to ``--out`` (default ``seatrack-demo``):
   once (``plots_radar.csv``, ``truth.csv``, ...; ``seatrack track data/plots_radar.csv``),
   the unlabelled plots of the multi-target situation and what the trackers made of them.
 
-Every output path is checked before any work and written atomically.
+Every output path is checked before any work; all outputs are replaced together at the end
+(one :func:`seatrack.io.atomic.output_transaction`, the sections' worker processes
+included): a failure or an interrupt leaves every previous output as it was and no
+temporary file.
 """
 
 from __future__ import annotations
@@ -149,10 +152,8 @@ def register(app: typer.Typer) -> None:
         if live:
             _live_demo(http, speed)
             return
-        from seatrack.io.atomic import immediate_outputs
-
-        with immediate_outputs():  # the demo tracks the data files it writes
-            typer.echo(run_demo(out, runs, processes), nl=False)
+        # every output in the command's transaction: replaced together at the end
+        typer.echo(run_demo(out, runs, processes), nl=False)
         typer.echo(
             f"open {out / 'report.html'}; try: seatrack track "
             f"{out / 'data' / 'plots_radar.csv'} --method turning --out tracks.csv"

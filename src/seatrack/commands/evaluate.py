@@ -39,7 +39,9 @@ def register(app: typer.Typer) -> None:
             "ANEES against time.",
         ),
         progress: bool = typer.Option(
-            True, "--progress/--no-progress", help="Show a progress bar."
+            True,
+            "--progress/--no-progress",
+            help="Show the estimate and progress lines of a run estimated at more than a minute.",
         ),
     ) -> None:
         """Run a seeded Monte-Carlo comparison of track methods on a scenario.
@@ -64,7 +66,9 @@ def register(app: typer.Typer) -> None:
             from seatrack.evaluate.multitarget import evaluate_multitarget
 
             mt = None if methods is None else [m.strip() for m in methods.split(",") if m.strip()]
-            typer.echo(evaluate_multitarget(sc, n, s, mt, sensor, csv_out, plots))
+            typer.echo(
+                evaluate_multitarget(sc, n, s, mt, sensor, csv_out, plots, progress=progress)
+            )
             return
         pngs = [plots / "pos_rmse.png", plots / "anees.png"] if plots is not None else []
         ev = run_evaluation(

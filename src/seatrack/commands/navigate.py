@@ -196,8 +196,9 @@ def register(app: typer.Typer) -> None:
         for i, e in enumerate(echoes):
             x0 = x0s[i if len(start) > 1 else 0]
             ech = read_echoes(e)
-            require_navigation(ech, cfg.antenna_period, cfg.steps_per_rev)
-            runs.append(navigate(lm, ech, x0, cfg, gyro=read_gyro(gy[i]) if gy else None))
+            bar = require_navigation(ech, cfg.antenna_period, cfg.steps_per_rev, "seatrack survey")
+            g = read_gyro(gy[i]) if gy else None
+            runs.append(navigate(lm, ech, x0, cfg, gyro=g, progress=bar))
         res = survey(lm, runs, SurveyConfig(min_visibility=min_visibility, drop_poor=drop_poor))
         write_map_csv(res.corrected, out)
         for j in range(len(lm)):

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.compiled import compile_all
+from seatrack.progress import Progress
 
 __all__ = ["MonteCarloResult", "monte_carlo", "run_seeds", "Column", "format_table", "rich_table"]
 
@@ -93,8 +94,7 @@ def monte_carlo(
     n_runs: int,
     seed: int,
     processes: int = 1,
-    progress: bool = False,
-    description: str = "Monte Carlo",
+    progress: Progress | None = None,
 ) -> MonteCarloResult:
     """Run ``fn(rng, run)`` for ``run = 0 .. n_runs-1`` and stack the results.
 
@@ -111,10 +111,9 @@ def monte_carlo(
     processes : int
         Worker processes (:class:`concurrent.futures.ProcessPoolExecutor`); 1 runs in
         this process. Results are identical for any value.
-    progress : bool
-        Show a progress bar (rich, on standard error).
-    description : str
-        Label of the progress bar.
+    progress : Progress, optional
+        Told of every finished run (:mod:`seatrack.progress`: lines on standard error
+        when the run was estimated long).
 
     Returns
     -------
@@ -128,34 +127,20 @@ def monte_carlo(
     results: list[dict[str, Any] | None] = [None] * n_runs
     t0 = time.perf_counter()
 
-    bar: Any = None
-    task: Any = None
-    if progress:
-        from rich.console import Console
-        from rich.progress import Progress
+    bar = progress if progress is not None else Progress.silent()
+    if processes == 1:
+        for i in range(n_runs):
+            results[i] = _one_run(fn, seeds[i], i)
+            bar.advance()
+    else:
+        compile_all()  # the workers must not compile the same kernels at once (numba #10128)
+        with ProcessPoolExecutor(max_workers=processes) as ex:
+            futures = {ex.submit(_one_run, fn, seeds[i], i): i for i in range(n_runs)}
+            from concurrent.futures import as_completed
 
-        bar = Progress(console=Console(stderr=True), transient=True)
-        bar.start()
-        task = bar.add_task(description, total=n_runs)
-    try:
-        if processes == 1:
-            for i in range(n_runs):
-                results[i] = _one_run(fn, seeds[i], i)
-                if bar is not None:
-                    bar.advance(task)
-        else:
-            compile_all()  # the workers must not compile the same kernels at once (numba #10128)
-            with ProcessPoolExecutor(max_workers=processes) as ex:
-                futures = {ex.submit(_one_run, fn, seeds[i], i): i for i in range(n_runs)}
-                from concurrent.futures import as_completed
-
-                for fut in as_completed(futures):
-                    results[futures[fut]] = fut.result()
-                    if bar is not None:
-                        bar.advance(task)
-    finally:
-        if bar is not None:
-            bar.stop()
+            for fut in as_completed(futures):
+                results[futures[fut]] = fut.result()
+                bar.advance()
     done = [r for r in results if r is not None]
     return MonteCarloResult(_stack(done), n_runs, seed, time.perf_counter() - t0)
 

@@ -420,10 +420,10 @@ MT_BYTES_PER_STEP_AND_TRACKER = 300
 MT_SECONDS_PER_STEP = 2e-4
 
 
-def require_multitarget(scenario: Any, sensor: Any, methods: Sequence[str], runs: int) -> None:
+def require_multitarget(scenario: Any, sensor: Any, methods: Sequence[str], runs: int) -> float:
     """Refuse a multi-target evaluation over the memory or time budget
     (:mod:`seatrack.io.budget`): runs x expected targets x scans x trackers (each method
-    with GNN and JPDA)."""
+    with GNN and JPDA). Returns the estimated run time, seconds."""
     from seatrack.io.budget import require
 
     scans = int(np.floor(scenario.duration / sensor.scan_period + 1e-9)) + 1
@@ -432,11 +432,13 @@ def require_multitarget(scenario: Any, sensor: Any, methods: Sequence[str], runs
     )
     steps = float(runs) * max(targets, 1.0) * scans
     trackers = 2 * len(methods)
+    seconds = steps * trackers * MT_SECONDS_PER_STEP
     require(
         f"evaluate: {runs} runs x {targets:.3g} targets x {scans} scans x {trackers} trackers",
         memory_bytes=steps * (MT_BYTES_PER_STEP + trackers * MT_BYTES_PER_STEP_AND_TRACKER),
-        seconds=steps * trackers * MT_SECONDS_PER_STEP,
+        seconds=seconds,
     )
+    return seconds
 
 
 def evaluate_multitarget(
@@ -449,6 +451,7 @@ def evaluate_multitarget(
     plots: Any = None,
     c: float = 100.0,
     p: float = 2.0,
+    progress: bool = True,
 ) -> str:
     """``seatrack evaluate`` on a multi-target scenario: every per-track filter in
     ``methods`` (default ``ekf``) with GNN and with JPDA, over ``runs`` seeded runs.
@@ -456,7 +459,8 @@ def evaluate_multitarget(
     The tracker is given the sensor's noise and the scenario's ``[evaluate.tracker]`` and
     ``[evaluate.<method>]`` tables, nothing else. Returns the printed report; writes the
     table to ``csv_out`` and, with ``plots`` (a folder), one picture per tracker of the
-    first run (plots, tracks, truth, GOSPA over time).
+    first run (plots, tracks, truth, GOSPA over time). ``progress``: the estimate and
+    progress lines of a long run (:mod:`seatrack.progress`).
     """
     from pathlib import Path
 
@@ -465,10 +469,14 @@ def evaluate_multitarget(
     from seatrack.evaluate.tracking import tracking_sensor
     from seatrack.io.atomic import atomic_write
     from seatrack.io.multitarget import save_picture
+    from seatrack.progress import Progress
 
     sens = tracking_sensor(scenario, sensor)
     names = list(methods) if methods else ["ekf"]
-    require_multitarget(scenario, sens, names, runs)
+    seconds = require_multitarget(scenario, sens, names, runs)
+    # progress in tracked runs, one per run and tracker
+    bar = Progress("seatrack evaluate", runs * 2 * len(names), "tracker runs", seconds,
+                   shown=progress)  # fmt: skip
     sims = [
         simulate_scenario(scenario, np.random.default_rng(s), sens)
         for s in np.random.SeedSequence(seed).spawn(runs)
@@ -478,7 +486,10 @@ def evaluate_multitarget(
     for m in names:
         table = {**method_config(scenario, sens, m), **tracker_table}
         for assoc in ("gnn", "jpda"):
-            tracked = [track_scenario_run(sim, m, table, assoc, c, p) for sim in sims]
+            tracked = []
+            for sim in sims:
+                tracked.append(track_scenario_run(sim, m, table, assoc, c, p))
+                bar.advance()
             name = f"{m} + {assoc}"
             rows.append(
                 summary_row(name, [r.scores for r in tracked], [r.ms_per_scan for r in tracked])

@@ -34,6 +34,7 @@ from seatrack.evaluate.metrics import rms_over_time
 from seatrack.evaluate.montecarlo import Column
 from seatrack.evaluate.montecarlo import MonteCarloResult
 from seatrack.evaluate.montecarlo import monte_carlo
+from seatrack.progress import Progress
 from seatrack.simulate.files import plots_from_measurements
 from seatrack.simulate.scenarios import Scenario
 from seatrack.simulate.scenarios import SensorConfig
@@ -207,9 +208,10 @@ def compare_methods(
     seed: int,
     sensor: str | None = None,
     processes: int = 1,
-    progress: bool = False,
+    progress: Progress | None = None,
 ) -> MonteCarloResult:
-    """Monte-Carlo runs of ``methods`` on ``scenario`` (see module docstring).
+    """Monte-Carlo runs of ``methods`` on ``scenario`` (see module docstring); ``progress``
+    is told of every finished run.
 
     Returns
     -------
@@ -234,9 +236,7 @@ def compare_methods(
         methods=tuple(methods),
         configs=configs,
     )
-    return monte_carlo(
-        fn, runs, seed, processes=processes, progress=progress, description="evaluate"
-    )
+    return monte_carlo(fn, runs, seed, processes=processes, progress=progress)
 
 
 #: peak bytes per method, run, target and scan of an evaluation: position and velocity
@@ -250,20 +250,23 @@ EVAL_SECONDS_PER_STEP = 3e-4
 
 def require_evaluation(
     scenario: Scenario, sensor: SensorConfig, methods: Sequence[str], runs: int, processes: int
-) -> None:
+) -> float:
     """Refuse an evaluation over the memory or time budget (:mod:`seatrack.io.budget`):
     runs x methods x targets x scans, each held as :data:`EVAL_BYTES_PER_STEP` bytes and
-    taking :data:`EVAL_SECONDS_PER_STEP` seconds (divided among the processes)."""
+    taking :data:`EVAL_SECONDS_PER_STEP` seconds (divided among the processes). Returns
+    the estimated run time, seconds."""
     from seatrack.io.budget import require
 
     scans = int(sensor.scan_times(scenario.duration).size)
     targets = max(len(scenario.targets), 1)
     steps = float(runs) * len(methods) * targets * scans
+    seconds = steps * EVAL_SECONDS_PER_STEP / max(processes, 1)
     require(
         f"evaluate: {runs} runs x {len(methods)} methods x {targets} target(s) x {scans} scans",
         memory_bytes=steps * EVAL_BYTES_PER_STEP,
-        seconds=steps * EVAL_SECONDS_PER_STEP / max(processes, 1),
+        seconds=seconds,
     )
+    return seconds
 
 
 def velocity_prior_information(

@@ -37,6 +37,7 @@ from seatrack.filters.base import Plots
 from seatrack.filters.base import PlotStatus
 from seatrack.filters.base import RecursiveFilter
 from seatrack.filters.base import TrackState
+from seatrack.progress import Progress
 
 __all__ = ["GROSS_NIS", "RESTART_AFTER", "run_tracks"]
 
@@ -55,6 +56,7 @@ def run_tracks(
     initiate: Initiate,
     gate: float = math.inf,
     restart_after: int = RESTART_AFTER,
+    progress: Progress | None = None,
 ) -> dict[str, NDArray[Any]]:
     """Run ``flt`` over labelled tracks, all tracks as one batch per step.
 
@@ -68,6 +70,7 @@ def run_tracks(
     gate : normalised innovation squared above which a plot is rejected as a gross error
         (``inf``: none; :data:`GROSS_NIS` for the registered methods).
     restart_after : gross errors in a row after which the track starts again (>= 1).
+    progress : told of the plots done before every step.
 
     Returns
     -------
@@ -99,6 +102,8 @@ def run_tracks(
     _emit(flt, state, rows[np.argsort(ti[rows])], out, N)
     started = state.status == PlotStatus.INITIATED
     for k in range(1, bounds.size - 1):
+        if progress is not None:
+            progress.update(bounds[k])
         rows = by_rank[bounds[k] : bounds[k + 1]]
         tracks = ti[rows]
         pk = plots.take(rows)

@@ -54,6 +54,7 @@ from numpy.typing import NDArray
 from seatrack.config import ConfigError
 from seatrack.config import config_keys
 from seatrack.config import parse_config
+from seatrack.errors import InputError
 from seatrack.filters.base import COMMON_COLUMNS
 from seatrack.filters.base import Plots
 from seatrack.filters.base import RecursiveFilter
@@ -61,6 +62,7 @@ from seatrack.filters.base import SensorNoise
 from seatrack.filters.base import plot_gaussian
 from seatrack.filters.driver import GROSS_NIS
 from seatrack.filters.driver import run_tracks
+from seatrack.progress import Progress
 
 if TYPE_CHECKING:
     from seatrack.models.targets import TargetClass
@@ -369,19 +371,60 @@ def build(
     return Method(name, flt, initiate, dd != d)
 
 
+def check_range_rate(name: str, has_range_rate: bool, where: str) -> None:
+    """Refuse plots without range rate for a method that needs it (``where``: the file).
+
+    Raises
+    ------
+    InputError
+        ``WHERE: method NAME needs a range_rate_mps column in the plots``.
+    """
+    if getattr(method_class(name), "needs_range_rate", False) and not has_range_rate:
+        raise InputError(f"{where}: method {name} needs a range_rate_mps column in the plots")
+
+
 def track_index(labels: NDArray[Any]) -> tuple[NDArray[np.int64], list[str]]:
-    """Track number ``0..T-1`` of each plot (in order of first appearance) and the labels."""
-    names, first, inv = np.unique(labels, return_index=True, return_inverse=True)
-    order = np.argsort(first, kind="stable")
-    rank = np.empty(order.size, np.int64)
-    rank[order] = np.arange(order.size)
-    return rank[inv.reshape(-1)], [str(n) for n in names[order]]
+    """Track number ``0..T-1`` of each plot (in order of first appearance) and the labels.
+
+    ``labels`` are text (a fixed-width or an object array, :func:`compact_labels`); one
+    hashing pass (pyarrow's dictionary encoding), no sort of the texts."""
+    import pyarrow as pa
+    import pyarrow.compute as pc
+
+    values = np.asarray(labels).ravel()
+    if values.size == 0:
+        return np.zeros(0, np.int64), []
+    try:
+        enc = pc.dictionary_encode(pa.array(values))
+    except (pa.ArrowException, TypeError, ValueError):  # labels of mixed types: sort them
+        names, first, inv = np.unique(values.astype(str), return_index=True, return_inverse=True)
+        order = np.argsort(first, kind="stable")
+        rank = np.empty(order.size, np.int64)
+        rank[order] = np.arange(order.size)
+        return rank[inv.reshape(-1)], [str(n) for n in names[order]]
+    codes = enc.indices.to_numpy(zero_copy_only=False).astype(np.int64)
+    return codes, [str(n) for n in enc.dictionary.to_pylist()]
+
+
+def compact_labels(labels: NDArray[Any]) -> NDArray[np.object_]:
+    """``labels`` as an object array holding one ``str`` per distinct value: 8 bytes per
+    row and the distinct texts once (a fixed-width array takes 4 bytes per character of
+    the longest text on every row). Same values, same comparisons."""
+    codes, names = track_index(labels)
+    table = np.empty(len(names), dtype=object)
+    table[:] = names
+    return np.asarray(table[codes])
 
 
 def run(
-    name: str, plots: Plots, table: Mapping[str, Any] | None = None, source: str = "config"
+    name: str,
+    plots: Plots,
+    table: Mapping[str, Any] | None = None,
+    source: str = "config",
+    progress: Progress | None = None,
 ) -> dict[str, NDArray[Any]]:
-    """Run method ``name`` over every labelled track of ``plots`` (one batch per step).
+    """Run method ``name`` over every labelled track of ``plots`` (one batch per step;
+    ``progress`` is told of the plots done).
 
     Returns the output columns (one value per plot, input order):
     :data:`COMMON_COLUMNS`, ``status``, ``nis``, then the method's own columns.
@@ -390,7 +433,7 @@ def run(
     ti, _ = track_index(labels)
     m = build(name, table, d=plots.d, range_rate=plots.has_range_rate, source=source)
     gate = math.inf if name.endswith("-spec") else GROSS_NIS
-    cols = run_tracks(m.filter, m.prepare(plots), ti, m.initiate, gate=gate)
+    cols = run_tracks(m.filter, m.prepare(plots), ti, m.initiate, gate=gate, progress=progress)
     first = [*COMMON_COLUMNS, "status", "nis"]
     return {c: cols[c] for c in first} | {c: v for c, v in cols.items() if c not in first}
 

@@ -18,8 +18,9 @@ a half-written file.
   open, :func:`atomic_path` keeps each finished temporary instead of moving it; they all
   replace their destinations when the block ends without an error, and are all removed
   when it ends with one (a full disk on the last output, an interrupt). The ``seatrack``
-  command line runs every command inside one (the demo, which reads back the data files
-  it writes, opts out with :func:`immediate_outputs`).
+  command line runs every command inside one; a file read back before the end is found
+  with :func:`pending_output`, and worker processes hand their outputs to the parent's
+  transaction with :func:`held_outputs` / :func:`adopt_outputs`.
 
 Output paths: an existing output must be a regular file (a device node, a pipe or a socket
 is refused: replacing ``/dev/null`` with a regular file is never what was meant). An output
@@ -35,8 +36,10 @@ from __future__ import annotations
 
 import contextlib
 import os
+import secrets
 import tempfile
 from collections.abc import Iterator
+from collections.abc import Mapping
 from pathlib import Path
 from typing import IO
 from typing import Any
@@ -53,6 +56,9 @@ __all__ = [
     "output_transaction",
     "pending_output",
     "immediate_outputs",
+    "held_outputs",
+    "adopt_outputs",
+    "discard_outputs",
     "TEMP_NAME_EXTRA",
 ]
 
@@ -261,16 +267,73 @@ class _Transaction:
         self.pending.clear()
 
     def commit(self) -> None:
+        """Replace every destination; on any failure put back those already replaced.
+
+        Before a destination is replaced, its previous file is kept as a hard link beside
+        it (or, where the file system has no hard links, renamed there); the backups are
+        removed once every temporary is in place. A failure (a rename refused, an
+        interrupt) puts each backup back over its destination, removes the outputs that
+        had no previous file and every temporary left, and re-raises.
+        """
         items = list(self.pending.items())
         self.pending.clear()
-        for k, (dest, tmp) in enumerate(items):
-            try:
-                os.replace(tmp, dest)
-            except OSError as exc:
-                for _, t in items[k:]:
-                    with contextlib.suppress(OSError):
-                        t.unlink()
-                raise OutputError(f"{dest}: cannot replace ({exc.strerror or exc})") from None
+        done: list[tuple[Path, Path | None]] = []  # replaced destinations, their backups
+        try:
+            for dest, tmp in items:
+                backup = _backup(dest)
+                done.append((dest, backup))  # before the rename: rolled back if it fails
+                try:
+                    os.replace(tmp, dest)
+                except OSError as exc:
+                    done.pop()
+                    if backup is not None:  # renamed away: put it back
+                        _restore(backup, dest)
+                    raise OutputError(f"{dest}: cannot replace ({exc.strerror or exc})") from None
+        except BaseException:
+            for dest, backup in reversed(done):
+                _restore(backup, dest)
+            for _, tmp in items:
+                with contextlib.suppress(OSError):
+                    tmp.unlink()
+            raise
+        for _, backup in done:
+            if backup is not None:
+                with contextlib.suppress(OSError):
+                    backup.unlink()
+
+
+def _backup(dest: Path) -> Path | None:
+    """Keep the previous file of ``dest`` beside it as a hard link (or, if the file system
+    refuses hard links, by renaming it); None when there is no previous file (or a folder
+    is in the way: the rename fails and nothing is moved)."""
+    if not os.path.lexists(dest) or (dest.is_dir() and not dest.is_symlink()):
+        return None
+    for _ in range(100):
+        backup = dest.with_name(f".{dest.name}.{secrets.token_hex(4)}{dest.suffix}")
+        try:
+            os.link(dest, backup)
+            return backup
+        except FileExistsError:
+            continue
+        except OSError:  # no hard links here: the previous file is renamed away
+            os.replace(dest, backup)
+            return backup
+    raise OutputError(f"{dest}: cannot keep a backup of the previous file")
+
+
+def _restore(backup: Path | None, dest: Path) -> None:
+    """Put ``backup`` back over ``dest`` (None: ``dest`` had no previous file, remove it).
+
+    A backup that is still a link of ``dest`` (the rename did not happen) is removed."""
+    try:
+        if backup is None:
+            os.unlink(dest)
+            return
+        os.replace(backup, dest)  # the same file twice: a no-op that leaves the link
+    except OSError:
+        return  # the backup is kept: the previous content is not lost
+    with contextlib.suppress(OSError):
+        os.unlink(backup)
 
 
 _TRANSACTIONS: list[_Transaction] = []
@@ -291,7 +354,10 @@ def output_transaction() -> Iterator[None]:
     writes and fsyncs its temporary as usual but leaves it beside its destination; when
     the block ends without an error the temporaries replace their destinations, in the
     order they were written (renames in the same folder: no data is written then, so a
-    full disk cannot stop them). When the block ends with an error or an interrupt, every
+    full disk cannot stop them). Each previous output is kept as a hard link beside it
+    until every rename has succeeded: a rename that fails all the same (a destination
+    turned into a folder, a permission taken away, an interrupt) puts back the outputs
+    already replaced. When the block ends with an error or an interrupt, every
     temporary is removed and every previous output is intact. A file the command reads
     back before the end (a picture embedded in a report) is found with
     :func:`pending_output`. Transactions nest: an inner one commits into the outer.
@@ -314,10 +380,49 @@ def output_transaction() -> Iterator[None]:
 
 
 @contextlib.contextmanager
+def held_outputs() -> Iterator[dict[Path, Path]]:
+    """Outputs written inside the block kept as finished temporaries and handed over
+    (destination -> temporary) instead of replacing their files: a worker process writes
+    its part of a command's outputs this way and its parent adds them to its transaction
+    with :func:`adopt_outputs` (or removes them with :func:`discard_outputs`). An error
+    inside the block removes the temporaries, as :func:`output_transaction` does."""
+    tx = _Transaction()
+    _TRANSACTIONS.append(tx)
+    held: dict[Path, Path] = {}
+    try:
+        yield held
+    except BaseException:
+        _TRANSACTIONS.remove(tx)
+        tx.discard()
+        raise
+    _TRANSACTIONS.remove(tx)
+    held.update(tx.pending)
+    tx.pending.clear()
+
+
+def adopt_outputs(held: Mapping[Path, Path]) -> None:
+    """Outputs held by :func:`held_outputs` (in this or a worker process) added to the open
+    :func:`output_transaction`; without one they replace their files at once."""
+    tx = _active()
+    for dest, tmp in held.items():
+        if tx is None or tx.direct:
+            os.replace(tmp, dest)
+        else:
+            tx.add(Path(tmp), Path(dest))
+
+
+def discard_outputs(held: Mapping[Path, Path]) -> None:
+    """Remove the temporaries of outputs held by :func:`held_outputs`."""
+    for tmp in held.values():
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+
+
+@contextlib.contextmanager
 def immediate_outputs() -> Iterator[None]:
     """Inside an :func:`output_transaction`, a block whose outputs replace their files at
-    once, as without a transaction: for a command that reads back what it wrote (the demo
-    writes its data files, then tracks them)."""
+    once, as without a transaction (a library caller that must see a file in place
+    before the end; commands read back what they wrote with :func:`pending_output`)."""
     tx = _Transaction(direct=True)
     _TRANSACTIONS.append(tx)
     try:

@@ -8,8 +8,8 @@ refused with one line naming the cause, the estimate and how to raise the budget
     error: evaluate: 100000 runs x 12 methods x 101 scans needs about 19.4 GB of memory,
     over the budget of 1.5 GB (raise it: seatrack --memory-limit SIZE ...)
 
-A run estimated at more than :data:`NOTICE_S` seconds says so on standard error when it
-starts (``note: ... about 4 min``).
+A run estimated at more than a minute says so when it starts and shows its progress: the
+command passes the same estimate to a :class:`seatrack.progress.Progress`.
 
 The budget of the process is set once, by the command line (``seatrack --memory-limit
 4G --time-limit 2h COMMAND ...``, or ``seatrack ais --memory-limit``); library callers may
@@ -23,17 +23,16 @@ from __future__ import annotations
 import contextlib
 import math
 import re
-import sys
 from collections.abc import Iterator
 from dataclasses import dataclass
 
 from seatrack.errors import InputError
+from seatrack.progress import format_duration
 
 __all__ = [
     "Budget",
     "DEFAULT_MEMORY_BYTES",
     "DEFAULT_TIME_S",
-    "NOTICE_S",
     "budget",
     "current",
     "format_bytes",
@@ -48,8 +47,6 @@ __all__ = [
 DEFAULT_MEMORY_BYTES = 3 << 29
 #: default time budget of one run, seconds
 DEFAULT_TIME_S = 3600.0
-#: a run estimated longer than this says so when it starts, seconds
-NOTICE_S = 60.0
 
 
 @dataclass(frozen=True)
@@ -98,16 +95,8 @@ def format_bytes(n: float) -> str:
     return f"{n:.0f} B"
 
 
-def _format_time(s: float) -> str:
-    if s >= 3600:
-        return f"{s / 3600:.3g} h"
-    if s >= 60:
-        return f"{s / 60:.3g} min"
-    return f"{s:.3g} s"
-
-
 def require(what: str, memory_bytes: float = 0.0, seconds: float = 0.0) -> None:
-    """Refuse the run if ``what`` needs more than the budget; note a long one.
+    """Refuse the run if ``what`` needs more than the budget.
 
     Parameters
     ----------
@@ -129,11 +118,9 @@ def require(what: str, memory_bytes: float = 0.0, seconds: float = 0.0) -> None:
         )
     if not math.isfinite(seconds) or seconds > b.time_s:
         raise InputError(
-            f"{what} would take about {_format_time(seconds)}, over the budget of "
-            f"{_format_time(b.time_s)} (raise it: seatrack --time-limit DURATION ...)"
+            f"{what} would take about {format_duration(seconds, 3)}, over the budget of "
+            f"{format_duration(b.time_s, 3)} (raise it: seatrack --time-limit DURATION ...)"
         )
-    if seconds > NOTICE_S:
-        print(f"note: {what}: estimated at about {_format_time(seconds)}", file=sys.stderr)
 
 
 _SIZE = re.compile(r"^\s*([0-9]*\.?[0-9]+(?:e[0-9]+)?)\s*([kmgt]?)i?b?\s*$", re.IGNORECASE)

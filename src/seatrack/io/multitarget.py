@@ -32,7 +32,6 @@ from numpy.typing import NDArray
 
 from seatrack.config import ConfigError
 from seatrack.config import config_keys
-from seatrack.config import load_toml
 from seatrack.config import parse_config
 from seatrack.filters import registry
 from seatrack.filters.base import COMMON_COLUMNS
@@ -40,7 +39,6 @@ from seatrack.filters.base import Plots
 from seatrack.filters.base import SensorNoise
 from seatrack.io.atomic import atomic_path
 from seatrack.io.atomic import atomic_write
-from seatrack.io.atomic import check_output_path
 from seatrack.io.compressed import open_input
 from seatrack.io.plots import LIMITS as PLOT_LIMITS
 from seatrack.io.plots import unit_warnings
@@ -50,6 +48,7 @@ from seatrack.io.table import check_input_file
 from seatrack.io.table import check_times
 from seatrack.io.table import decode_text
 from seatrack.io.table import read_csv_table
+from seatrack.progress import Progress
 from seatrack.tracking import Tracker
 from seatrack.tracking import TrackerConfig
 from seatrack.tracking import TrackerRun
@@ -70,7 +69,7 @@ __all__ = [
     "write_tracks",
     "write_plot_labels",
     "write_unlabelled_plots",
-    "track_unlabelled",
+    "track_unlabelled_file",
     "run_unlabelled",
     "tracker_setup",
     "tracks_text",
@@ -309,7 +308,7 @@ def write_plot_labels(path: str | Path, plots: Plots, labels: NDArray[np.int64])
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class UnlabelledRun:
-    """What :func:`track_unlabelled` did."""
+    """What :func:`track_unlabelled_file` did."""
 
     plots: Plots
     run: TrackerRun
@@ -362,39 +361,43 @@ def run_unlabelled(
     association: str | None = None,
     all_tracks: bool = False,
     associator: Associator | None = None,
+    progress: Progress | None = None,
 ) -> UnlabelledRun:
     """The multi-target tracker of ``seatrack track`` on unlabelled plots: the per-track
     filter of :func:`make_filter` (automatic noise levels), the sensor noise and tracker
     keys of ``table``; ``rows`` of the result is the number of TRACKS rows. ``associator``
-    replaces the configured association role (:class:`seatrack.tracking.roles.Associator`)."""
+    replaces the configured association role (:class:`seatrack.tracking.roles.Associator`);
+    ``progress`` is told of the plots done after every scan."""
     tcfg, sensor, m_tab = tracker_setup(table, source, association)
     flt, noise = make_filter(method, m_tab, plots, source, tcfg)
     tracker = Tracker(flt.filter, associator=associator, sensor=sensor, config=tcfg)
-    run = tracker.run(flt.prepare(plots), all_tracks=all_tracks)
+    run = tracker.run(flt.prepare(plots), all_tracks=all_tracks, progress=progress)
     return UnlabelledRun(plots, run, tracker, int(run.t.size), noise)
 
 
-def track_unlabelled(
-    plots_csv: Path,
-    out: Path,
-    method: str = "ekf",
-    config: Path | None = None,
-    all_tracks: bool = False,
-    plots_out: Path | None = None,
-    plot: Path | None = None,
+def track_unlabelled_file(
+    path: Path,
+    method: str,
+    table: Mapping[str, Any],
+    source: str = "config",
     association: str | None = None,
-) -> str:
-    """``seatrack track`` on a file without a ``track`` column; returns the summary line."""
-    for p in (out, plots_out, plot):
-        if p is not None:
-            check_output_path(p)
-    table = load_toml(config) if config is not None else {}
-    source = str(config) if config is not None else "config"
+    all_tracks: bool = False,
+    associator: Associator | None = None,
+) -> UnlabelledRun:
+    """``seatrack track`` on a file without a ``track`` column: the configuration checked
+    before the plots are read, then :func:`run_unlabelled` (with the estimate and progress
+    of a long run, :mod:`seatrack.progress`); :func:`write_outputs` writes the result."""
     tracker_setup(table, source, association)  # configuration errors before the plots
-    plots = read_unlabelled_plots(plots_csv)
-    res = run_unlabelled(plots, method, table, source, association, all_tracks)
-    write_outputs(res, out, plots_out, plot, f"{Path(plots_csv).name}: {method}")
-    return res.summary(method, out)
+    plots = read_unlabelled_plots(path)
+    registry.check_range_rate(method, plots.has_range_rate, str(path))
+    bar = Progress("seatrack track", len(plots), "plots", len(plots) * UNLABELLED_SECONDS_PER_PLOT)
+    return run_unlabelled(plots, method, table, source, association, all_tracks, associator, bar)
+
+
+#: seconds per plot of the multi-target tracker, reading and writing included (ekf, GNN:
+#: ``seatrack track`` on 1,000 scans of 100 targets and 100 clutter plots took 6.2-6.9 s on
+#: the 2-core development machine at load 2-5)
+UNLABELLED_SECONDS_PER_PLOT = 3.5e-5
 
 
 def write_outputs(

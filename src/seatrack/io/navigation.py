@@ -27,6 +27,7 @@ from seatrack.io.table import read_csv_table
 from seatrack.io.table import seconds
 from seatrack.navigation.navigator import Echoes
 from seatrack.navigation.navigator import NavResult
+from seatrack.progress import Progress
 
 FloatArray = NDArray[np.float64]
 
@@ -145,19 +146,22 @@ NAV_BYTES_PER_TICK = 500
 NAV_SECONDS_PER_TICK = 1e-4
 
 
-def require_navigation(echoes: Echoes, antenna_period_s: float, steps_per_rev: int) -> None:
+def require_navigation(
+    echoes: Echoes, antenna_period_s: float, steps_per_rev: int, command: str = "seatrack navigate"
+) -> Progress:
     """Refuse a navigation run over the memory or time budget (:mod:`seatrack.io.budget`),
     from the span of the echo log: one predictor tick per ``antenna_period_s /
-    steps_per_rev`` seconds, however few the echoes (a gap costs as much as a log)."""
+    steps_per_rev`` seconds, however few the echoes (a gap costs as much as a log).
+    Returns the run's :class:`~seatrack.progress.Progress` (in filter cycles)."""
     from seatrack.io.budget import require
 
     t = np.asarray(echoes.t, float)
-    if t.size < 2:
-        return
-    span = float(t.max() - t.min())
+    span = float(t.max() - t.min()) if t.size >= 2 else 0.0
     ticks = span * steps_per_rev / antenna_period_s
+    seconds = ticks * NAV_SECONDS_PER_TICK
     require(
         f"{echoes.source}: the echo log spans {span:g} s, {ticks:.3g} filter cycles",
         memory_bytes=ticks * NAV_BYTES_PER_TICK,
-        seconds=ticks * NAV_SECONDS_PER_TICK,
+        seconds=seconds,
     )
+    return Progress(command, ticks, "filter cycles", seconds)

@@ -22,11 +22,14 @@ angles are radians (converted here, at the edge); the result is a
 from __future__ import annotations
 
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.filters.base import Plots
+from seatrack.filters.registry import compact_labels
+from seatrack.filters.registry import track_index
 from seatrack.io.suspect import km_warning
 from seatrack.io.suspect import ms_warning
 from seatrack.io.suspect import radians_warning
@@ -91,7 +94,7 @@ def read_plots(path: str | Path) -> Plots:
     if not _times_increase(tab):
         check_times(tab, "time_s", group="track", strict=True)
     n = len(tab)
-    labels = tab["track"] if "track" in tab else np.full(n, "1")
+    labels = compact_labels(tab["track"]) if "track" in tab else np.full(n, "1")
     _check_gaps(tab, labels)
     unit_warnings(tab, labels)
     t = tab["time_s"]
@@ -112,14 +115,15 @@ def read_plots(path: str | Path) -> Plots:
     )
 
 
-def unit_warnings(tab: Table, labels: NDArray[np.str_] | None = None) -> None:
+def unit_warnings(tab: Table, labels: NDArray[Any] | None = None) -> None:
     """Warn (one line each, :mod:`seatrack.io.suspect`) when azimuths look like radians,
     ranges like kilometres or times like milliseconds."""
+    codes = None if labels is None else track_index(labels)[0]
     warn(
         (
             radians_warning(tab.path, "azimuth_deg", tab["azimuth_deg"]),
             km_warning(tab.path, "range_m", tab["range_m"]),
-            ms_warning(tab.path, "time_s", tab["time_s"], labels),
+            ms_warning(tab.path, "time_s", tab["time_s"], None if labels is None else codes),
         )
     )
 
@@ -159,10 +163,14 @@ def _read_fast(path: Path) -> Table | None:
             longest = pc.max(pc.utf8_length(col)).as_py() or 0
             if longest > MAX_TEXT_CHARS:  # reported with its line by the row reader
                 return None
-            labels = np.asarray(col.to_pylist(), dtype=str)
-            if (np.char.strip(labels) != labels).any():
+            enc = pc.dictionary_encode(col).combine_chunks()
+            names = enc.dictionary.to_pylist()
+            if any(s.strip() != s for s in names):
                 return None
-            cols[c] = labels
+            table_of_names = np.empty(len(names), dtype=object)
+            table_of_names[:] = names  # one str per distinct id: 8 bytes per row
+            codes = enc.indices.to_numpy(zero_copy_only=False)
+            cols[c] = table_of_names[codes]
             continue
         a = col.to_numpy(zero_copy_only=False).astype(float)
         given = ~np.asarray(col.is_null().to_numpy(zero_copy_only=False), dtype=bool)
@@ -174,7 +182,7 @@ def _read_fast(path: Path) -> Table | None:
 
 def _times_increase(tab: Table) -> bool:
     """True when times strictly increase within every track (vectorised)."""
-    keys = tab["track"] if "track" in tab else np.zeros(len(tab), dtype=str)
+    keys = track_index(tab["track"])[0] if "track" in tab else np.zeros(len(tab), np.int64)
     order = np.argsort(keys, kind="stable")
     same = keys[order][1:] == keys[order][:-1]
     return bool(np.all(np.diff(tab["time_s"][order])[same] > 0))
@@ -183,8 +191,10 @@ def _times_increase(tab: Table) -> bool:
 def split_tracks(plots: Plots) -> list[Plots]:
     """The plots of each track (order of first appearance), each a :class:`Plots`."""
     labels = plots.track if plots.track is not None else np.full(len(plots), "1")
-    names = dict.fromkeys(labels.tolist())
-    return [plots.take(np.flatnonzero(labels == k)) for k in names]
+    codes, names = track_index(labels)
+    order = np.argsort(codes, kind="stable")
+    bounds = np.searchsorted(codes[order], np.arange(len(names) + 1))
+    return [plots.take(order[bounds[k] : bounds[k + 1]]) for k in range(len(names))]
 
 
 def read_plot_tracks(path: str | Path) -> list[Plots]:
@@ -192,13 +202,16 @@ def read_plot_tracks(path: str | Path) -> list[Plots]:
     return split_tracks(read_plots(path))
 
 
-def _sensor_velocity(t: FloatArray, s: FloatArray, labels: NDArray[np.str_]) -> FloatArray:
+def _sensor_velocity(t: FloatArray, s: FloatArray, labels: NDArray[Any]) -> FloatArray:
     """Finite-difference sensor velocity, per track (``np.gradient``, 2nd order inside)."""
     v = np.zeros_like(s)
     if not s.any():
         return v
-    for k in dict.fromkeys(labels.tolist()):
-        ix = np.flatnonzero(labels == k)
+    codes, names = track_index(labels)
+    order = np.argsort(codes, kind="stable")
+    bounds = np.searchsorted(codes[order], np.arange(len(names) + 1))
+    for k in range(len(names)):
+        ix = order[bounds[k] : bounds[k + 1]]
         if ix.size >= 2:
             v[ix] = np.gradient(s[ix], t[ix], axis=0)
     return v
@@ -246,11 +259,12 @@ def _check_values(tab: Table) -> None:
             _bad(tab, big, f"{c} = {bad_value:g} is implausible (> {MAX_DISTANCE_M:g} m)")
 
 
-def _check_gaps(tab: Table, labels: NDArray[np.str_]) -> None:
+def _check_gaps(tab: Table, labels: NDArray[Any]) -> None:
     """Refuse a time gap longer than ``LIMITS["gap_s"]`` between plots of one track."""
-    order = np.lexsort((tab["time_s"], labels))
+    codes = track_index(labels)[0]
+    order = np.lexsort((tab["time_s"], codes))
     t = tab["time_s"][order]
-    same = labels[order][1:] == labels[order][:-1]
+    same = codes[order][1:] == codes[order][:-1]
     gap = np.diff(t)
     bad = same & (gap > LIMITS["gap_s"])
     if bad.any():

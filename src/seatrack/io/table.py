@@ -64,6 +64,7 @@ from numpy.typing import NDArray
 
 from seatrack.errors import InputError
 from seatrack.io.budget import require
+from seatrack.io.compressed import check_ratio
 from seatrack.io.compressed import read_input
 
 __all__ = [
@@ -285,7 +286,8 @@ def check_input_file(path: str | Path, kind: str = "a file") -> Path:
     InputError
         ``PATH: file not found`` (also a broken or looping symbolic link, said so), ``PATH:
         is a directory, expected KIND`` or ``PATH: not a regular file (a device, pipe or
-        socket), expected KIND``.
+        socket), expected KIND``; a compression bomb
+        (:func:`seatrack.io.compressed.check_ratio`).
     """
     p = Path(path)
     if not p.exists():
@@ -296,6 +298,7 @@ def check_input_file(path: str | Path, kind: str = "a file") -> Path:
         raise InputError(f"{p}: is a directory, expected {kind}")
     if not p.is_file():
         raise InputError(f"{p}: not a regular file (a device, pipe or socket), expected {kind}")
+    check_ratio(p)
     return p
 
 

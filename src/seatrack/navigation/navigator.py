@@ -56,6 +56,7 @@ from seatrack.navigation.window import Window
 from seatrack.navigation.window import in_range
 from seatrack.navigation.window import settle_window
 from seatrack.navigation.window import step_window
+from seatrack.progress import Progress
 
 FloatArray = NDArray[np.float64]
 
@@ -469,8 +470,10 @@ def navigate(
     gyro: tuple[ArrayLike, ArrayLike] | None = None,
     aux: AuxData | None = None,
     t0: float | None = None,
+    progress: Progress | None = None,
 ) -> NavResult:
-    """Run the landmark navigator over an echo log.
+    """Run the landmark navigator over an echo log (``progress``: told of the filter
+    cycles done).
 
     Parameters
     ----------
@@ -509,6 +512,8 @@ def navigate(
     pad = cfg.gate.max_half_angle + np.radians(1.0)
     last_rev = int(np.floor(sweep.Phi_of(start) / TWO_PI))
     for k in range(n_ticks):
+        if progress is not None:
+            progress.update(k)
         tk = float(ticks[k])
         run.serve_swept(tk, pad)
         run.advance(tk)

@@ -31,6 +31,9 @@ import numpy as np
 from seatrack.compiled import compile_all
 from seatrack.filters.registry import METHODS
 from seatrack.filters.registry import run
+from seatrack.io.atomic import adopt_outputs
+from seatrack.io.atomic import discard_outputs
+from seatrack.io.atomic import held_outputs
 from seatrack.report.plots import save
 from seatrack.report.plots import situation_figure
 from seatrack.simulate.families import HEADLINE_SEEDS
@@ -339,7 +342,9 @@ def ais_section(out: Path, runs: int) -> Section:
 def multitarget_section(out: Path, runs: int) -> Section:
     """The multi-target tracker on unlabelled plots of the bundled coastal scenario."""
     from seatrack.evaluate.multitarget import simulate_scenario
-    from seatrack.io.multitarget import track_unlabelled
+    from seatrack.io.atomic import pending_output
+    from seatrack.io.multitarget import track_unlabelled_file
+    from seatrack.io.multitarget import write_outputs
     from seatrack.io.multitarget import write_unlabelled_plots
     from seatrack.simulate.scenarios import bundled_scenario
     from seatrack.simulate.scenarios import load_scenario
@@ -349,9 +354,12 @@ def multitarget_section(out: Path, runs: int) -> Section:
     sim = simulate_scenario(sc, np.random.default_rng(HEADLINE_SEEDS.start), sc.sensors[0])
     plots_csv = out / "data" / "plots_unlabelled.csv"
     write_unlabelled_plots(plots_csv, sim.plots)
-    text = track_unlabelled(
-        plots_csv, out / "data" / "tracks_unlabelled.csv", "ekf", plot=out / "multitarget.png"
-    )
+    # as ``seatrack track data/plots_unlabelled.csv``: the file as written (still a
+    # temporary of the command's transaction), tracked and written by the command's path
+    tracks_csv, png = out / "data" / "tracks_unlabelled.csv", out / "multitarget.png"
+    res = track_unlabelled_file(pending_output(plots_csv), "ekf", {})
+    write_outputs(res, tracks_csv, None, png, f"{plots_csv.name}: ekf")
+    text = res.summary("ekf", tracks_csv)
     n_true = int(np.unique(sim.truth_id).size)
     return Section(
         "multitarget",
@@ -389,5 +397,26 @@ def run_sections(out: Path, runs: int, processes: int = 1) -> list[Section]:
     if processes <= 1:
         return [_one(k, out, runs) for k in keys]
     compile_all()  # the workers must not compile the same kernels at once (numba #10128)
+    done: list[tuple[Section, dict[Path, Path]]] = []
+    error: BaseException | None = None
     with ProcessPoolExecutor(max_workers=processes) as pool:
-        return list(pool.map(_one, keys, [out] * len(keys), [runs] * len(keys)))
+        futures = [pool.submit(_held, k, out, runs) for k in keys]
+        for fut in futures:  # every worker is waited for: none leaves a temporary behind
+            try:
+                done.append(fut.result())
+            except BaseException as exc:  # noqa: BLE001 - re-raised below, after the cleanup
+                error = error or exc
+    if error is not None:
+        for _, held in done:
+            discard_outputs(held)
+        raise error
+    for _, held in done:  # the workers' outputs join the command's transaction
+        adopt_outputs(held)
+    return [s for s, _ in done]
+
+
+def _held(key: str, out: Path, runs: int) -> tuple[Section, dict[Path, Path]]:
+    """One section in a worker process, its outputs held for the parent's transaction."""
+    with held_outputs() as held:
+        section = _one(key, out, runs)
+    return section, held

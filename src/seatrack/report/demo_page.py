@@ -102,9 +102,11 @@ def _table(rows: Sequence[Row]) -> str:
 
 
 def _figure(path: Path | None, key: str) -> str:
-    if path is None or not Path(path).is_file():
+    from seatrack.io.atomic import pending_output
+
+    if path is None or not pending_output(path).is_file():
         return ""
-    data = base64.b64encode(Path(path).read_bytes()).decode("ascii")
+    data = base64.b64encode(pending_output(path).read_bytes()).decode("ascii")
     return f'<img data-figure="{key}" alt="{key}" src="data:image/png;base64,{data}">'
 
 

@@ -63,6 +63,8 @@ __all__ = [
     "RadarLike",
     "parse_multitarget",
     "simulate_multitarget",
+    "born_targets",
+    "work_samples",
 ]
 
 
@@ -358,3 +360,25 @@ def _assemble(
     else:
         tt, ti, tp, tv = np.zeros(0), np.zeros(0, np.int64), np.zeros((0, 3)), np.zeros((0, 3))
     return MultiTargetRun(plots, np.concatenate(origin)[order], times, tt, ti, tp, tv)
+
+
+def born_targets(
+    duration: float, dt: float, sensors: Sequence[Any], population: TargetPopulation | None
+) -> float:
+    """Expected targets a population adds over ``duration`` s, seen at the fastest sensor's
+    scan period (s); 0 without a population."""
+    fastest = min((s.scan_period for s in sensors), default=dt)
+    return population.expected_targets(duration, fastest) if population else 0.0
+
+
+def work_samples(
+    duration: float, dt: float, n_scripted: int, sensors: Sequence[Any],
+    population: TargetPopulation | None = None,
+) -> float:  # fmt: skip
+    """Simulated samples of one run of a scenario: truth (every ``dt`` s) and scans of every
+    target, the expected ones of a ``[multitarget]`` population included (what
+    ``seatrack.simulate.scenarios.MAX_POINTS`` bounds); ``sensors`` have a ``scan_period``
+    (s)."""
+    n_targets = n_scripted + born_targets(duration, dt, sensors, population)
+    scans = sum(math.floor(duration / s.scan_period + 1e-9) + 1 for s in sensors)
+    return float((scans + math.floor(duration / dt + 1e-9) + 1) * (n_targets + 1))

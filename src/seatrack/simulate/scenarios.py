@@ -78,7 +78,9 @@ from seatrack.io.table import MAX_TIME_S
 from seatrack.io.table import MIN_SIGMA
 from seatrack.io.table import InputError
 from seatrack.simulate.multitarget import TargetPopulation
+from seatrack.simulate.multitarget import born_targets
 from seatrack.simulate.multitarget import parse_multitarget
+from seatrack.simulate.multitarget import work_samples
 from seatrack.simulate.sensors import Measurements
 from seatrack.simulate.sensors import NoiseModel
 from seatrack.simulate.sensors import observe
@@ -669,10 +671,7 @@ def _check_work(
 ) -> None:  # fmt: skip
     """Bound the memory and time one simulated run takes, before anything is allocated
     (the scripted targets and the expected ones of a ``[multitarget]`` population)."""
-    fastest = min((s.scan_period for s in sensors), default=dt)
-    born = population.expected_targets(duration, fastest) if population else 0.0
-    n_targets = n_scripted + born
-    total = 0.0
+    born = born_targets(duration, dt, sensors, population)
     for i, s in enumerate(sensors):
         n = math.floor(duration / s.scan_period + 1e-9) + 1
         kp = f"sensors[{i}]"
@@ -687,18 +686,17 @@ def _check_work(
                 f"{s.clutter_density:g} false plots per scan over {n} scans; at most "
                 f"{MAX_SAMPLES} in a run",
             )
-        total += n * (n_targets + 1)
     n_truth = math.floor(duration / dt + 1e-9) + 1
     if n_truth > MAX_SAMPLES:
         raise r.error(
             "dt_s", f"duration_s / dt_s gives {n_truth:.3g} truth samples; at most {MAX_SAMPLES}"
         )
-    total += n_truth * (n_targets + 1)
+    total = work_samples(duration, dt, n_scripted, sensors, population)
     if total > MAX_POINTS:
         raise r.error(
             "multitarget" if born > n_scripted else "duration_s",
-            f"{total:.3g} simulated samples in one run (truth and scans of {n_targets:.3g} "
-            f"target(s)); at most {MAX_POINTS}: shorten the scenario or lengthen the periods"
+            f"{total:.3g} simulated samples in one run (truth and scans of {n_scripted + born:.3g}"
+            f" target(s)); at most {MAX_POINTS}: shorten the scenario or lengthen the periods"
             + (", or ask for fewer targets, births or crossings" if born else ""),
         )
 

@@ -50,6 +50,7 @@ from seatrack.filters.base import Plots
 from seatrack.filters.base import RecursiveFilter
 from seatrack.filters.base import SensorNoise
 from seatrack.filters.base import TrackState
+from seatrack.progress import Progress
 from seatrack.tracking.clutter import ClutterRate
 from seatrack.tracking.clutter import DetectionRate
 from seatrack.tracking.clutter import SurveillanceRegion
@@ -346,9 +347,12 @@ class Tracker:
         return ids, status
 
     # -- a whole file -----------------------------------------------------------------
-    def run(self, plots: Plots, all_tracks: bool = False) -> TrackerRun:
-        """Track every scan of a file (scans = distinct plot times, in time order)."""
-        return run_tracker(self, plots, all_tracks)
+    def run(
+        self, plots: Plots, all_tracks: bool = False, progress: Progress | None = None
+    ) -> TrackerRun:
+        """Track every scan of a file (scans = distinct plot times, in time order);
+        ``progress`` is told of the plots done after every scan."""
+        return run_tracker(self, plots, all_tracks, progress)
 
     @property
     def position_std(self) -> FloatArray:
@@ -420,8 +424,11 @@ def usable_plots(plots: Plots) -> NDArray[np.bool_]:
     return np.asarray(good & (plots.range > 0))
 
 
-def run_tracker(tracker: Tracker, plots: Plots, all_tracks: bool = False) -> TrackerRun:
-    """Feed a whole file to ``tracker`` scan by scan and collect the output rows."""
+def run_tracker(
+    tracker: Tracker, plots: Plots, all_tracks: bool = False, progress: Progress | None = None
+) -> TrackerRun:
+    """Feed a whole file to ``tracker`` scan by scan and collect the output rows
+    (``progress``: told of the plots done after every scan)."""
     order = np.argsort(plots.t, kind="stable")
     in_order = bool(np.all(order == np.arange(order.size)))
     sorted_plots = plots if in_order else plots.take(order)
@@ -435,6 +442,8 @@ def run_tracker(tracker: Tracker, plots: Plots, all_tracks: bool = False) -> Tra
     secs, cpu, clutter = np.zeros(times.size), np.zeros(times.size), np.zeros(times.size)
     for k in range(times.size):
         a, b = int(bounds[k]), int(bounds[k + 1])
+        if progress is not None:
+            progress.update(a)
         scan = _slice(sorted_plots, a, b)
         keep = np.flatnonzero(good[a:b])
         t0, c0 = time.perf_counter(), time.process_time()

@@ -38,6 +38,7 @@ from seatrack.io.ais.reports import check_rows
 from seatrack.io.ais.reports import mark
 from seatrack.io.ais.reports import mmsi_codes
 from seatrack.io.ais.reports import parse_times
+from seatrack.io.table import MAX_TEXT_CHARS
 from seatrack.io.table import InputError
 from seatrack.io.table import describe_header
 
@@ -204,11 +205,34 @@ def _time_column(col: Any) -> tuple[FloatArray, NDArray[np.bool_]]:
         todo &= ~got
     if todo.any():  # fractional seconds, offsets, epoch seconds
         idx = np.flatnonzero(todo)
-        t[idx] = parse_times(np.asarray(text.take(idx).to_pylist(), dtype=str))
+        cells = [bounded_cell(c) for c in text.take(idx).to_pylist()]
+        t[idx] = parse_times(np.asarray(cells, dtype=str))
     return t, missing
 
 
-def _to_float(cells: NDArray[np.str_]) -> tuple[FloatArray, NDArray[np.bool_], NDArray[np.bool_]]:
+#: what a cell longer than :data:`~seatrack.io.table.MAX_TEXT_CHARS` is read as: no number,
+#: no time (its row is rejected for the field, with its line), and a text of one character
+#: instead of a copy as wide as the longest cell on every row of the block
+TOO_LONG = "#"
+
+
+def bounded_cell(text: str) -> str:
+    """``text``, or :data:`TOO_LONG` when it has more than ``MAX_TEXT_CHARS`` characters."""
+    return text if len(text) <= MAX_TEXT_CHARS else TOO_LONG
+
+
+def _bounded_column(col: Any) -> NDArray[np.object_]:
+    """A text column (pyarrow) as an object array of its cells (empty for a null), cells
+    over ``MAX_TEXT_CHARS`` characters replaced by :data:`TOO_LONG`."""
+    import pyarrow.compute as pc
+
+    col = col.fill_null("")
+    if (pc.max(pc.utf8_length(col)).as_py() or 0) > MAX_TEXT_CHARS:
+        col = pc.if_else(pc.greater(pc.utf8_length(col), MAX_TEXT_CHARS), TOO_LONG, col)
+    return np.asarray(col.to_numpy(zero_copy_only=False), dtype=object)
+
+
+def _to_float(cells: NDArray[Any]) -> tuple[FloatArray, NDArray[np.bool_], NDArray[np.bool_]]:
     """Text cells -> (values, empty mask, not-a-number mask). Empty/bad cells are NaN."""
     empty = cells == ""
     out = np.full(cells.shape, np.nan)
@@ -266,12 +290,13 @@ def _assemble(
 
 
 def from_text_columns(
-    source: str, lines: NDArray[np.int64], cols: dict[str, NDArray[np.str_]]
+    source: str, lines: NDArray[np.int64], cols: dict[str, NDArray[Any]]
 ) -> AisReports:
-    """Rows from text cells per canonical field (missing fields: empty cells)."""
+    """Rows from text cells per canonical field (missing fields: empty cells); the cells
+    are object arrays (one pointer per row, however long the longest cell)."""
     n = lines.size
-    empty = np.full(n, "", dtype=str)
-    num = {f: _to_float(np.asarray(cols.get(f, empty), dtype=str)) for f in _NUMERIC}
+    empty = np.full(n, "", dtype=object)
+    num = {f: _to_float(np.asarray(cols.get(f, empty), dtype=object)) for f in _NUMERIC}
     time_s = np.asarray(cols.get("time", empty), dtype=str)
     return _assemble(source, lines, num, parse_times(time_s), time_s == "")
 
@@ -284,11 +309,7 @@ def _batch(
     lines = np.arange(first_line, first_line + n, dtype=np.int64)
     names = set(batch.schema.names)
     if text:
-        cols = {
-            f: np.asarray(batch.column(c).fill_null("").to_numpy(zero_copy_only=False), dtype=str)
-            for f, c in mapping.items()
-            if c in names
-        }
+        cols = {f: _bounded_column(batch.column(c)) for f, c in mapping.items() if c in names}
         return from_text_columns(source, lines, cols)
     num = {}
     for f in _NUMERIC:

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from seatrack.io.ais.columnar import SCHEMAS
+from seatrack.io.ais.columnar import bounded_cell
 from seatrack.io.ais.columnar import detect_schema
 from seatrack.io.ais.columnar import from_text_columns
 from seatrack.io.ais.columnar import open_input
@@ -97,7 +98,7 @@ def parse_lines(lines: list[bytes], source: str) -> AisReports:
             csv_lines.append(i)
             for f, cells in csv_cells.items():
                 k = cols.get(f, -1)
-                cells.append(fields[k].strip() if k >= 0 else "")
+                cells.append(bounded_cell(fields[k].strip()) if k >= 0 else "")
     parts = [_csv_part(source, csv_lines, csv_cells), _nmea_part(source, nmea, skipped)]
     parts.append(_reject_part(source, rejects))
     r = concat_reports(parts)
@@ -111,7 +112,7 @@ def parse_lines(lines: list[bytes], source: str) -> AisReports:
 
 def _csv_part(source: str, lines: list[int], cells: dict[str, list[str]]) -> AisReports:
     n = len(lines)
-    cols = {f: np.asarray(v, dtype=str) for f, v in cells.items() if n}
+    cols = {f: np.asarray(v, dtype=object) for f, v in cells.items() if n}
     return from_text_columns(source, np.asarray(lines, dtype=np.int64), cols)
 
 

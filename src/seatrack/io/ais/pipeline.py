@@ -57,6 +57,8 @@ from seatrack.io.ais.reports import AisReports
 from seatrack.io.ais.reports import concat_reports
 from seatrack.io.ais.reports import mark_duplicates
 from seatrack.io.ais.reports import rejection_counts
+from seatrack.io.compressed import open_input
+from seatrack.progress import Progress
 
 __all__ = [
     "DEFAULT_MEMORY_LIMIT",
@@ -73,6 +75,18 @@ DEFAULT_MEMORY_LIMIT = 2 << 30
 TRACK_BYTES_PER_ROW = 1150
 #: bytes per row of a kept block (canonical columns)
 BLOCK_BYTES_PER_ROW = 73
+#: seconds per report of a whole run, reading to writing (``benchmarks/ais.py``: a
+#: DMA-shaped day of 15,000,000 reports in 168 s with other jobs on the 2-core development
+#: machine, 89k reports/s, docs/ais.md; 200,000-report files take 3.5-3.9 s there)
+SECONDS_PER_REPORT = 1.2e-5
+#: decompressed / compressed size assumed for a compressed log (the bundled AIS logs gzip
+#: 4.4 to 6.4 times)
+COMPRESSION_RATIO = 6.0
+#: share of a run's time spent reading (the rest: grouping, tracking, writing; cProfile of
+#: the hourly files: CSV parsing 9.8 s of 79 s, docs/ais.md)
+READ_SHARE = 0.2
+#: bytes sampled at the start of a text file to estimate its bytes per line
+SAMPLE_BYTES = 1 << 20
 
 
 def rss_bytes() -> int:
@@ -211,11 +225,46 @@ class _Registry:
         return ids[order], gid[order]
 
 
+def estimate_reports(paths: Sequence[str | Path]) -> float:
+    """The number of reports in ``paths``, estimated before reading them: the rows of a
+    Parquet file; a text file's size over its bytes per line in the first
+    :data:`SAMPLE_BYTES` (a compressed file's size times :data:`COMPRESSION_RATIO`)."""
+    from seatrack.io.ais.columnar import is_parquet
+    from seatrack.io.compressed import compression_of
+
+    total = 0.0
+    for path in paths:
+        p = Path(path)
+        try:
+            if is_parquet(p):
+                import pyarrow.parquet as pq
+
+                total += pq.ParquetFile(p).metadata.num_rows
+                continue
+            size = float(p.stat().st_size)
+            if compression_of(p) is not None:
+                size *= COMPRESSION_RATIO
+            with open_input(p) as fh:
+                head = fh.read(SAMPLE_BYTES)
+        except Exception:  # an unreadable file is reported, with its name, by the reader
+            continue
+        total += size * max(head.count(b"\n"), 1) / max(len(head), 1)
+    return total
+
+
+def ais_progress(paths: Sequence[str | Path]) -> Progress:
+    """The progress of ``seatrack ais`` on ``paths`` (:func:`estimate_reports` reports at
+    :data:`SECONDS_PER_REPORT`)."""
+    n = estimate_reports(paths)
+    return Progress("seatrack ais", n, "reports", n * SECONDS_PER_REPORT)
+
+
 def _read_all(
-    paths: Sequence[str | Path], store: _Store, block_bytes: int
+    paths: Sequence[str | Path], store: _Store, block_bytes: int, progress: Progress
 ) -> tuple[_Registry, dict[str, int], tuple[str, ...]]:
     reg = _Registry()
     skipped: dict[str, int] = {}
+    rows = 0
     for s, p in enumerate(paths):
         blocks: list[AisReports] = []
         for attempt in file_blocks(p, block_bytes):
@@ -227,6 +276,9 @@ def _read_all(
             b.skipped = {}
             reg.add(b.mmsi)
             store.add(b)
+            rows += len(b)
+        total = max(progress.total, rows) if s + 1 < len(paths) else rows
+        progress.update(rows, total, "read", READ_SHARE * rows / max(total, 1))
     return reg, skipped, tuple(str(p) for p in paths)
 
 
@@ -352,6 +404,7 @@ def track_files(
     group_rows: int | None = None,
     block_bytes: int = 32 << 20,
     on_group: Callable[[AisReports, AisTracks], None] | None = None,
+    progress: Progress | None = None,
 ) -> RunSummary:
     """Read, track and write AIS files within a memory budget (see the module docstring).
 
@@ -366,13 +419,16 @@ def track_files(
     group_rows : rows per vessel group (overrides the size from ``memory_limit``).
     on_group : called with each group's reports and tracks after it is written (e.g. to
         collect the tracks for a map).
+    progress : told of the reports read (after each file) and tracked (after each group).
     """
     cfg = config or AisTrackerConfig()
     summary = RunSummary()
+    bar = progress if progress is not None else Progress.silent()
     with tempfile.TemporaryDirectory(prefix="seatrack-ais-") as tmp, TracksWriter(out) as writer:
         folder = Path(tmp)
         store = _Store(max(memory_limit // 4, 1 << 26), folder)
-        reg, skipped, sources = _read_all(paths, store, block_bytes)
+        reg, skipped, sources = _read_all(paths, store, block_bytes, bar)
+        n_rows = bar.done
         summary.skipped = skipped
         rows_per_group = group_rows or group_rows_for(memory_limit)
         ids, gid = reg.groups(rows_per_group)
@@ -387,6 +443,8 @@ def track_files(
         def emit(r: AisReports, tr: AisTracks) -> None:
             writer.write(r, track_columns(tr))
             summary.add(r, tr)
+            share = READ_SHARE + (1 - READ_SHARE) * summary.rows / max(n_rows, 1)
+            bar.update(summary.rows, n_rows, "tracked", share)
             if on_group is not None:
                 on_group(r, tr)
 

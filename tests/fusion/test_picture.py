@@ -22,12 +22,13 @@ T0 = 1.7e9
 ORIGIN = (56.0, 7.0)  # open North Sea
 
 
-@pytest.fixture(scope="module")
-def scene() -> tuple[Picture, sc.Truth, np.ndarray]:
+@pytest.fixture(scope="module", params=["track", "measurement"])
+def scene(request: pytest.FixtureRequest) -> tuple[Picture, sc.Truth, np.ndarray]:
+    """The scene fused by each association design (every test below holds for both)."""
     setup, cfg = parse_fusion_config({
         "lat_deg": ORIGIN[0], "lon_deg": ORIGIN[1], "max_range_m": 20000.0,
         "sigma_range_m": 20.0, "sigma_azimuth_deg": 0.3, "blind_sectors_deg": [[250.0, 265.0]],
-        "fusion": {"dark_delay_s": 10.0},
+        "fusion": {"dark_delay_s": 10.0, "association": request.param},
     })  # fmt: skip
     cov = Coverage.of(setup.site)
     start = np.array([

@@ -29,15 +29,24 @@
    * spoofed: precision and recall of ``not_seen`` over AIS vessel rows inside coverage,
      positive while the vessel's AIS is moved (60 s grace after the move) (>= 0.95);
    * shared: the share of the shared MMSIs' reports given to the right one of the two
-     split vessels (>= 95 %).
+     split vessels (>= 95 %);
+   * RMSE: the radar tracks' position error against the truth over the matched rows (and
+     over those with an AIS identity) -- what the measurement design changes.
 
-2. **Speed.** The fusion step alone (:meth:`seatrack.fusion.picture.Fusion.step`:
-   prediction of every AIS vessel, gating, scores, assignment, classes and coverage) for
-   1,000 vessels within 38 km of the radar, radar tracks and AIS states drawn directly
-   (no trackers), 200 scans; median and 95th percentile per scan (target <= 20 ms).
+   Both association designs (``[fusion] association``: ``track``, ``measurement``) run
+   on the same plots and reports of each seed (``--association`` picks one).
+
+2. **Speed.** The fusion step alone for 1,000 vessels within 38 km of the radar, 200
+   scans; median and 95th percentile per scan (target <= 20 ms). Track design:
+   :meth:`seatrack.fusion.picture.Fusion.step` (prediction of every AIS vessel, gating,
+   scores, assignment, classes and coverage) on radar positions and AIS states drawn
+   directly. Measurement design: the AIS reports since the last scan applied to 1,000
+   radar track states of the site's per-track filter (gating, scores, assignment, Kalman
+   updates), the identities and :meth:`~seatrack.fusion.picture.Fusion.classify`.
 
     python benchmarks/fusion.py                  # seeds 1-2 (tuned on) and 3-5 (reported)
-    python benchmarks/fusion.py --seeds 3 --quick
+    python benchmarks/fusion.py --seeds 3 4 5    # the untuned seeds, both designs
+    python benchmarks/fusion.py --seeds 3 --quick --association measurement
 
 The defaults of ``[fusion]`` were chosen on seeds 1 and 2 (rows marked ``tuned``);
 seeds 3 and later were run only for reporting.
@@ -62,7 +71,7 @@ from scipy.spatial import cKDTree  # noqa: E402
 
 from seatrack.data import ais_sample  # noqa: E402
 from seatrack.filters.ais import track_reports  # noqa: E402
-from seatrack.filters.ekf import EKF  # noqa: E402
+from seatrack.filters.base import Plots  # noqa: E402
 from seatrack.fusion import scenario as sc  # noqa: E402
 from seatrack.fusion.associate import ASSOCIATIONS  # noqa: E402
 from seatrack.fusion.associate import AisStates  # noqa: E402
@@ -79,6 +88,7 @@ from seatrack.fusion.picture import parse_fusion_config  # noqa: E402
 from seatrack.geometry import KNOT_MPS  # noqa: E402
 from seatrack.geometry import polar_to_cart  # noqa: E402
 from seatrack.io.ais import read_ais  # noqa: E402
+from seatrack.io.multitarget import make_filter  # noqa: E402
 
 SITE = {
     "lat_deg": 56.2, "lon_deg": 7.1, "antenna_height_m": 40.0, "max_range_m": 40000.0,
@@ -328,13 +338,16 @@ def _speed_scene(n: int, scans: int) -> tuple[Any, ...]:
     return p0, vel, states, rng
 
 
-def speed(cov: Coverage, cfg: FusionConfig, n: int = 1000, scans: int = 200) -> np.ndarray:
+def speed(
+    cov: Coverage, cfg: FusionConfig, setup: Any, n: int = 1000, scans: int = 200
+) -> np.ndarray:
     """Seconds per scan of the fusion step with ``n`` vessels (radar and AIS drawn directly).
 
     Track design: :meth:`Fusion.step` on radar positions drawn about the truth. Measurement
-    design: the AIS reports since the last scan applied to ``n`` EKF radar tracks
-    (:class:`ReportUpdater`), the identities and :meth:`Fusion.classify`; the radar tracks
-    are predicted to the scan outside the timing (the tracker's part)."""
+    design: the AIS reports since the last scan applied to ``n`` radar tracks of the
+    site's per-track filter (the tracker's default: the adaptive process noise over the
+    EKF) (:class:`ReportUpdater`), the identities and :meth:`Fusion.classify`; the radar
+    tracks are predicted to the scan outside the timing (the tracker's part)."""
     p0, vel, states, rng = _speed_scene(n, scans)
     fusion = Fusion(cov, states, cfg)
     ids = np.arange(n, dtype=np.int64)
@@ -344,7 +357,10 @@ def speed(cov: Coverage, cfg: FusionConfig, n: int = 1000, scans: int = 200) -> 
         o = np.argsort(states.t, kind="stable")
         r = measurement_noise(np.full(o.size, 10.0), np.full(o.size, 0.5), states.vel[o], cfg)
         meas = AisMeasurements(states.vessel[o], states.t[o], states.pos[o], r)
-        flt = EKF()
+        scan_t = np.repeat(np.arange(scans) * SCAN_S, 2)
+        dummy = Plots(scan_t, np.full(scan_t.size, 1000.0), np.zeros(scan_t.size))
+        flt = make_filter(setup.site.method, setup.method_table, dummy, "site",
+                          setup.tracker)[0].filter  # fmt: skip
         x0 = np.concatenate([p0 + rng.normal(0, 25, (n, 2)), vel], -1)
         track = flt.initiate(np.zeros(n), x0, np.tile(np.diag([625.0, 625.0, 4.0, 4.0]),
                                                        (n, 1, 1)))  # fmt: skip
@@ -427,7 +443,7 @@ def main() -> None:
                   f"{np.mean([e['rmse_ais_m'] for e in es]):.1f} m)")  # fmt: skip
     if not args.quick:
         for design in designs:
-            s = speed(cov, replace(cfg, association=design))
+            s = speed(cov, replace(cfg, association=design), setup)
             print(
                 f"fusion step ({design}), 1,000 vessels: median {1e3 * np.median(s):.1f} ms, "
                 f"95th percentile {1e3 * np.percentile(s, 95):.1f} ms per scan (target <= 20 "

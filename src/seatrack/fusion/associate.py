@@ -46,6 +46,7 @@ from scipy.spatial import cKDTree
 
 from seatrack.config import Checked
 from seatrack.config import param
+from seatrack.filters.ais.kernel import vessel_starts
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -285,8 +286,9 @@ def assign_pairs(rows: IntArray, cols: IntArray, weight: FloatArray, n_rows: int
     if multi.size == 0:
         return chosen
     multi = multi[np.argsort(comp[multi], kind="stable")]
-    cuts = np.flatnonzero(np.diff(comp[multi])) + 1
-    for part in np.split(multi, cuts):
+    bounds = vessel_starts(comp[multi])  # the runs of one component
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        part = multi[a:b]
         r_u, r_i = np.unique(rows[part], return_inverse=True)
         c_u, c_i = np.unique(cols[part], return_inverse=True)
         big = float(weight[part].sum()) + 1.0

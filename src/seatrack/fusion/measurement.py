@@ -46,6 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.config import ConfigError
+from seatrack.filters.ais.kernel import vessel_starts
 from seatrack.filters.base import RecursiveFilter
 from seatrack.filters.base import TrackState
 from seatrack.filters.imm import combine
@@ -154,13 +155,10 @@ def position_update(state: TrackState, z: FloatArray, r: FloatArray) -> TrackSta
 def vessel_rounds(vessel: IntArray, t: FloatArray) -> IntArray:
     """Round of each report: its rank in time among the reports of its vessel (0 for the
     first), so that a round holds at most one report per vessel."""
-    n = vessel.size
     order = np.lexsort((t, vessel))
-    sv = vessel[order]
-    start = np.flatnonzero(np.r_[True, sv[1:] != sv[:-1]]) if n else np.zeros(0, np.int64)
-    run_start = start[np.searchsorted(start, np.arange(n), side="right") - 1]
-    rank = np.empty(n, np.int64)
-    rank[order] = np.arange(n) - run_start
+    bounds = vessel_starts(vessel[order])
+    rank = np.empty(vessel.size, np.int64)
+    rank[order] = np.arange(vessel.size) - np.repeat(bounds[:-1], np.diff(bounds))
     return rank
 
 

@@ -1,13 +1,18 @@
 """The fused picture: radar plots and AIS reports in, three tables out (docs/fusion.md).
 
 1. The plots go through the multi-target tracker of the radar's ``radar.toml``
-   (:mod:`seatrack.io.multitarget`), in the radar's East-North plane.
+   (:mod:`seatrack.io.multitarget`), in the radar's East-North plane (scan by scan,
+   between the AIS updates, for the measurement design).
 2. The AIS reports are brought to the same plane (:meth:`Coverage.to_local`), shared MMSIs
    split and jumps removed (:mod:`~seatrack.fusion.anomalies`), and every vessel tracked
    by the project's AIS tracker (:func:`seatrack.filters.ais.track_reports`, forward
    filter only, so that each state uses the reports up to its time).
 3. At every radar scan :class:`Fusion` predicts the AIS vessels, associates them with the
-   radar tracks (:mod:`~seatrack.fusion.associate`) and classes both sides:
+   radar tracks and classes both sides. The association is one of two designs
+   (``association``): ``track`` (default), the tracker's output against the AIS states
+   (:mod:`~seatrack.fusion.associate`); ``measurement``, the tracker run scan by scan with
+   the AIS reports since the last scan updating the tracks they are associated with
+   (:mod:`~seatrack.fusion.measurement`). The classes are the same for both:
 
    * a radar track with an AIS vessel is ``ais``; one inside coverage that has had none
      for ``dark_delay_s`` is ``dark``; otherwise (outside coverage, or waiting) ``unknown``;

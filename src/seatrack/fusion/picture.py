@@ -46,6 +46,7 @@ from seatrack.filters.ais.noise import position_noise
 from seatrack.filters.ais.tracks import AisTracks
 from seatrack.filters.base import Plots
 from seatrack.filters.base import SensorNoise
+from seatrack.filters.registry import Method
 from seatrack.fusion.anomalies import gap_limits
 from seatrack.fusion.anomalies import reporting_gaps
 from seatrack.fusion.anomalies import split_identities
@@ -60,6 +61,7 @@ from seatrack.fusion.associate import velocity_covariance
 from seatrack.fusion.coverage import Coverage
 from seatrack.fusion.measurement import AisMeasurements
 from seatrack.fusion.measurement import ReportUpdater
+from seatrack.fusion.measurement import check_filter
 from seatrack.fusion.measurement import measurement_noise
 from seatrack.geometry import cart_to_polar
 from seatrack.geometry import enu_to_geodetic
@@ -370,11 +372,18 @@ def fuse_picture(reports: AisReports, plots: Plots, setup: RadarSetup,
     """Prepare the AIS reports, track the plots and fuse them scan by scan by the design
     of ``config.association`` (docs/fusion.md)."""
     cfg = config or FusionConfig()
+    flt = None
+    if cfg.association == "measurement":  # a filter the design cannot update: refused first
+        flt = make_filter(setup.site.method, setup.method_table, plots, source, setup.tracker)[0]
+        try:
+            check_filter(flt.filter)
+        except ConfigError as exc:
+            raise ConfigError(f"{source}: fusion: {exc}") from None
     cov = coverage or Coverage.of(setup.site, cfg.land_mask, cfg.land_cell)
     ais = prepare_ais(reports, cov, cfg)
     fusion = Fusion(cov, ais.states, cfg)
-    if cfg.association == "measurement":
-        scans = list(_measurement_scans(plots, setup, ais, fusion, source))
+    if flt is not None:
+        scans = list(_measurement_scans(plots, setup, flt, ais, fusion))
     else:
         scans = list(_track_scans(plots, setup, fusion, source))
     empty = np.zeros(0, np.int64)
@@ -428,16 +437,13 @@ def _track_scans(plots: Plots, setup: RadarSetup, fusion: Fusion,
         yield _Scan(float(t), rows, res, time.perf_counter() - tic)
 
 
-def _measurement_scans(plots: Plots, setup: RadarSetup, ais: AisSide, fusion: Fusion,
-                       source: str) -> Iterator[_Scan]:  # fmt: skip
+def _measurement_scans(plots: Plots, setup: RadarSetup, flt: Method, ais: AisSide,
+                       fusion: Fusion) -> Iterator[_Scan]:  # fmt: skip
     """The measurement design: at each scan the AIS reports since the last one update the
     confirmed radar tracks (:class:`~seatrack.fusion.measurement.ReportUpdater`), the
-    tracker takes the scan's plots and :meth:`Fusion.classify` the reported tracks."""
-    flt, _ = make_filter(setup.site.method, setup.method_table, plots, source, setup.tracker)
-    try:
-        updater = ReportUpdater(flt.filter, ais.measurements or _no_reports(), fusion.config)
-    except ConfigError as exc:
-        raise ConfigError(f"{source}: fusion: {exc}") from None
+    tracker (per-track filter ``flt``) takes the scan's plots and :meth:`Fusion.classify`
+    the reported tracks."""
+    updater = ReportUpdater(flt.filter, ais.measurements or _no_reports(), fusion.config)
     tracker = MultiTargetTracker(flt.filter, setup.sensor, setup.tracker)
     prepared = flt.prepare(plots)
     order = np.argsort(prepared.t, kind="stable")

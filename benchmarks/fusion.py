@@ -29,15 +29,24 @@
    * spoofed: precision and recall of ``not_seen`` over AIS vessel rows inside coverage,
      positive while the vessel's AIS is moved (60 s grace after the move) (>= 0.95);
    * shared: the share of the shared MMSIs' reports given to the right one of the two
-     split vessels (>= 95 %).
+     split vessels (>= 95 %);
+   * RMSE: the radar tracks' position error against the truth over the matched rows (and
+     over those with an AIS identity) -- what the measurement design changes.
 
-2. **Speed.** The fusion step alone (:meth:`seatrack.fusion.picture.Fusion.step`:
-   prediction of every AIS vessel, gating, scores, assignment, classes and coverage) for
-   1,000 vessels within 38 km of the radar, radar tracks and AIS states drawn directly
-   (no trackers), 200 scans; median and 95th percentile per scan (target <= 20 ms).
+   Both association designs (``[fusion] association``: ``track``, ``measurement``) run
+   on the same plots and reports of each seed (``--association`` picks one).
+
+2. **Speed.** The fusion step alone for 1,000 vessels within 38 km of the radar, 200
+   scans; median and 95th percentile per scan (target <= 20 ms). Track design:
+   :meth:`seatrack.fusion.picture.Fusion.step` (prediction of every AIS vessel, gating,
+   scores, assignment, classes and coverage) on radar positions and AIS states drawn
+   directly. Measurement design: the AIS reports since the last scan applied to 1,000
+   radar track states of the site's per-track filter (gating, scores, assignment, Kalman
+   updates), the identities and :meth:`~seatrack.fusion.picture.Fusion.classify`.
 
     python benchmarks/fusion.py                  # seeds 1-2 (tuned on) and 3-5 (reported)
-    python benchmarks/fusion.py --seeds 3 --quick
+    python benchmarks/fusion.py --seeds 3 4 5    # the untuned seeds, both designs
+    python benchmarks/fusion.py --seeds 3 --quick --association measurement
 
 The defaults of ``[fusion]`` were chosen on seeds 1 and 2 (rows marked ``tuned``);
 seeds 3 and later were run only for reporting.
@@ -54,6 +63,7 @@ import argparse  # noqa: E402
 import math  # noqa: E402
 import time  # noqa: E402
 from dataclasses import dataclass  # noqa: E402
+from dataclasses import replace  # noqa: E402
 from typing import Any  # noqa: E402
 
 import numpy as np  # noqa: E402
@@ -61,10 +71,16 @@ from scipy.spatial import cKDTree  # noqa: E402
 
 from seatrack.data import ais_sample  # noqa: E402
 from seatrack.filters.ais import track_reports  # noqa: E402
+from seatrack.filters.base import Plots  # noqa: E402
 from seatrack.fusion import scenario as sc  # noqa: E402
+from seatrack.fusion.associate import ASSOCIATIONS  # noqa: E402
 from seatrack.fusion.associate import AisStates  # noqa: E402
 from seatrack.fusion.associate import FusionConfig  # noqa: E402
+from seatrack.fusion.associate import predict_ais  # noqa: E402
 from seatrack.fusion.coverage import Coverage  # noqa: E402
+from seatrack.fusion.measurement import AisMeasurements  # noqa: E402
+from seatrack.fusion.measurement import ReportUpdater  # noqa: E402
+from seatrack.fusion.measurement import measurement_noise  # noqa: E402
 from seatrack.fusion.picture import Fusion  # noqa: E402
 from seatrack.fusion.picture import Picture  # noqa: E402
 from seatrack.fusion.picture import fuse_picture  # noqa: E402
@@ -72,6 +88,7 @@ from seatrack.fusion.picture import parse_fusion_config  # noqa: E402
 from seatrack.geometry import KNOT_MPS  # noqa: E402
 from seatrack.geometry import polar_to_cart  # noqa: E402
 from seatrack.io.ais import read_ais  # noqa: E402
+from seatrack.io.multitarget import make_filter  # noqa: E402
 
 SITE = {
     "lat_deg": 56.2, "lon_deg": 7.1, "antenna_height_m": 40.0, "max_range_m": 40000.0,
@@ -130,10 +147,28 @@ class Scene:
     seconds: float
 
 
-def make_scene(
-    real: sc.Truth, interval: np.ndarray, cov: Coverage, setup: Any, cfg: FusionConfig, seed: int
-) -> tuple[Scene, sc.Truth]:
-    """A relocated truth, its corruption, plots and reports, and the fused picture."""
+@dataclass
+class Inputs:
+    """One seed's truth, its corruption and the simulated plots and reports."""
+
+    truth: sc.Truth
+    corruption: sc.Corruption
+    who: np.ndarray
+    reports: Any
+    plots: Any
+
+
+def fuse_scene(inputs: Inputs, cov: Coverage, setup: Any, cfg: FusionConfig) -> Scene:
+    """The fused picture of one seed's inputs (by ``cfg.association``)."""
+    tic = time.perf_counter()
+    pic = fuse_picture(inputs.reports, inputs.plots, setup, cfg, coverage=cov)
+    return Scene(inputs.corruption, inputs.who, pic, time.perf_counter() - tic)
+
+
+def make_inputs(
+    real: sc.Truth, interval: np.ndarray, cov: Coverage, setup: Any, seed: int
+) -> Inputs:
+    """A relocated truth, its corruption, plots and reports."""
     rng = np.random.default_rng(seed)
     truth = relocate(real, rng)
     t0, t1 = truth.t.min(), truth.t.max()
@@ -162,9 +197,7 @@ def make_scene(
     scans = np.arange(math.ceil(t0), t1, SCAN_S)
     plots, _ = sc.simulate_plots(truth, scans, cov, setup.sensor, CLUTTER, rng)
     rep, who = sc.ais_reports(truth, interval, ORIGIN, corr, 10.0, rng)
-    tic = time.perf_counter()
-    pic = fuse_picture(rep, plots, setup, cfg, coverage=cov)
-    return Scene(corr, who, pic, time.perf_counter() - tic), truth
+    return Inputs(truth, corr, who, rep, plots)
 
 
 def _truly_dark(
@@ -196,6 +229,7 @@ def evaluate(scene: Scene, truth: sc.Truth) -> dict[str, Any]:
     pic, c = scene.picture, scene.corruption
     r = pic.radar
     match = np.full(r.t.size, -1, np.int64)
+    err = np.full(r.t.size, np.nan)
     for t in np.unique(r.t):
         rows = np.flatnonzero(r.t == t)
         alive, pos, _ = sc.interpolate(truth, float(t))
@@ -203,6 +237,7 @@ def evaluate(scene: Scene, truth: sc.Truth) -> dict[str, Any]:
             continue
         d, k = cKDTree(pos).query(r.pos[rows])
         match[rows] = np.where(d < MATCH_M, alive[np.minimum(k, alive.size - 1)], -1)
+        err[rows] = d
     # the true vessel of each AIS vessel (majority of its reports)
     a = pic.ais
     n_v = a.vessel_mmsi.size
@@ -222,6 +257,9 @@ def evaluate(scene: Scene, truth: sc.Truth) -> dict[str, Any]:
     named = m & (pic.radar_vessel >= 0) & ~dark_true
     right = true_of[np.maximum(pic.radar_vessel, 0)] == match
     out: dict[str, Any] = {"identity": float(right[named].mean()), "named_rows": int(named.sum())}
+    # position error of the radar tracks against the truth (matched rows; those with AIS)
+    out["rmse_m"] = float(np.sqrt(np.mean(err[m] ** 2)))
+    out["rmse_ais_m"] = float(np.sqrt(np.mean(err[m & (pic.klass == 1)] ** 2)))
     p, rc, npred, ntrue = _prf((pic.klass == 2)[settled], dark_true[settled])
     out.update(dark_precision=p, dark_recall=rc, dark_rows=ntrue)
     # time to detect: per episode, from going dark (or the track's start, if later) to
@@ -274,8 +312,10 @@ def evaluate(scene: Scene, truth: sc.Truth) -> dict[str, Any]:
     return out
 
 
-def speed(cov: Coverage, cfg: FusionConfig, n: int = 1000, scans: int = 200) -> np.ndarray:
-    """Seconds per scan of the fusion step with ``n`` vessels (radar and AIS drawn directly)."""
+def _speed_scene(n: int, scans: int) -> tuple[Any, ...]:
+    """``n`` vessels within 38 km of the radar, straight and steady: start positions,
+    velocities, their AIS reports (10 m noise; rows sorted by vessel, time) as
+    :class:`AisStates`, and a random generator."""
     rng = np.random.default_rng(0)
     r0 = 38000.0 * np.sqrt(rng.uniform(0.01, 1.0, n))
     p0 = polar_to_cart(r0, rng.uniform(0, 2 * math.pi, n))
@@ -295,12 +335,49 @@ def speed(cov: Coverage, cfg: FusionConfig, n: int = 1000, scans: int = 200) -> 
         np.tile(np.eye(2) * 100.0, (m, 1, 1)), np.tile(np.eye(2) * 0.04, (m, 1, 1)),
         np.full(n, 30.0),
     )  # fmt: skip
+    return p0, vel, states, rng
+
+
+def speed(
+    cov: Coverage, cfg: FusionConfig, setup: Any, n: int = 1000, scans: int = 200
+) -> np.ndarray:
+    """Seconds per scan of the fusion step with ``n`` vessels (radar and AIS drawn directly).
+
+    Track design: :meth:`Fusion.step` on radar positions drawn about the truth. Measurement
+    design: the AIS reports since the last scan applied to ``n`` radar tracks of the
+    site's per-track filter (the tracker's default: the adaptive process noise over the
+    EKF) (:class:`ReportUpdater`), the identities and :meth:`Fusion.classify`; the radar
+    tracks are predicted to the scan outside the timing (the tracker's part)."""
+    p0, vel, states, rng = _speed_scene(n, scans)
     fusion = Fusion(cov, states, cfg)
     ids = np.arange(n, dtype=np.int64)
     rcov = np.tile(np.eye(2) * 625.0, (n, 1, 1))
     out = np.zeros(scans)
+    if cfg.association == "measurement":
+        o = np.argsort(states.t, kind="stable")
+        r = measurement_noise(np.full(o.size, 10.0), np.full(o.size, 0.5), states.vel[o], cfg)
+        meas = AisMeasurements(states.vessel[o], states.t[o], states.pos[o], r)
+        scan_t = np.repeat(np.arange(scans) * SCAN_S, 2)
+        dummy = Plots(scan_t, np.full(scan_t.size, 1000.0), np.zeros(scan_t.size))
+        flt = make_filter(setup.site.method, setup.method_table, dummy, "site",
+                          setup.tracker)[0].filter  # fmt: skip
+        x0 = np.concatenate([p0 + rng.normal(0, 25, (n, 2)), vel], -1)
+        track = flt.initiate(np.zeros(n), x0, np.tile(np.diag([625.0, 625.0, 4.0, 4.0]),
+                                                       (n, 1, 1)))  # fmt: skip
+        updater = ReportUpdater(flt, meas, cfg)
+        everyone = np.ones(n, bool)
     for k in range(scans):
         t = 10.0 + k * SCAN_S
+        if cfg.association == "measurement":
+            tic = time.perf_counter()
+            track = updater.update(track, ids, everyone, t)
+            pred = predict_ais(states, t, cfg)
+            updater.prune(ids, pred.vessel)
+            a = updater.assignment(ids, pred.vessel)
+            fusion.classify(t, ids, track.x[:, :2], pred, a)
+            out[k] = time.perf_counter() - tic
+            track = flt.predict(track, np.full(n, t))
+            continue
         z = p0 + vel * t + rng.normal(0, 25, (n, 2))
         tic = time.perf_counter()
         fusion.step(t, ids, z, rcov)
@@ -312,6 +389,8 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--seeds", type=int, nargs="*", default=[1, 2, 3, 4, 5])
     ap.add_argument("--quick", action="store_true", help="skip the speed case")
+    ap.add_argument("--association", choices=(*ASSOCIATIONS, "both"), default="both",
+                    help="the design(s) to run (default both, side by side)")  # fmt: skip
     ap.add_argument("--fusion", nargs="*", default=[], metavar="KEY=VALUE",
                     help="[fusion] keys to change (numbers), e.g. dark_delay_s=5")  # fmt: skip
     args = ap.parse_args()
@@ -325,34 +404,51 @@ def main() -> None:
         f"truth: {real.mmsi.size} vessels, {real.t.size} smoothed states, median reporting "
         f"interval {np.median(interval):.0f} s; radar horizon {cov.horizon_m / 1000:.1f} km"
     )
-    head = ("seed", "dark/silent/spoofed/shared pairs", "identity (rows)", "dark P", "dark R",
-            "(rows)", "detect med/max s", "<=60s (episodes)", "spoof P", "spoof R", "(rows)",
-            "shared", "ms/scan", "run s")  # fmt: skip
+    head = ("seed", "design", "dark/silent/spoofed/shared pairs", "identity (rows)",
+            "dark P", "dark R", "(rows)", "detect med/max s", "<=60s (episodes)", "spoof P",
+            "spoof R", "(rows)", "shared", "RMSE m (with AIS)", "ms/scan", "run s")  # fmt: skip
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
     print(" | ".join(head))
-    rows = []
+    designs = ASSOCIATIONS if args.association == "both" else (args.association,)
+    rows: dict[str, list[dict[str, Any]]] = {d: [] for d in designs}
     for seed in args.seeds:
-        scene, truth = make_scene(real, interval, cov, setup, cfg, seed)
-        e = evaluate(scene, truth)
-        rows.append(e)
-        tag = f"{seed}{' (tuned)' if seed in TUNED_SEEDS else ''}"
-        print(f"{tag} | {e['sizes']} | {100 * e['identity']:.2f} % ({e['named_rows']}) | "
-              f"{e['dark_precision']:.3f} | {e['dark_recall']:.3f} | ({e['dark_rows']}) | "
-              f"{e['detect_median_s']:.0f}/{e['detect_max_s']:.0f} | "
-              f"{e['detect_within_60s']:.2f} ({e['episodes']}) | {e['spoof_precision']:.3f} | "
-              f"{e['spoof_recall']:.3f} | ({e['spoof_rows']}) | {100 * e['shared']:.1f} % | "
-              f"{e['per_scan_ms']:.2f} | {e['seconds']:.0f}", flush=True)  # fmt: skip
+        inputs = make_inputs(real, interval, cov, setup, seed)
+        for design in designs:
+            scene = fuse_scene(inputs, cov, setup, replace(cfg, association=design))
+            e = evaluate(scene, inputs.truth)
+            if seed not in TUNED_SEEDS:
+                rows[design].append(e)
+            tag = f"{seed}{' (tuned)' if seed in TUNED_SEEDS else ''}"
+            print(f"{tag} | {design} | {e['sizes']} | {100 * e['identity']:.2f} % "
+                  f"({e['named_rows']}) | {e['dark_precision']:.3f} | {e['dark_recall']:.3f} | "
+                  f"({e['dark_rows']}) | {e['detect_median_s']:.0f}/{e['detect_max_s']:.0f} | "
+                  f"{e['detect_within_60s']:.2f} ({e['episodes']}) | "
+                  f"{e['spoof_precision']:.3f} | {e['spoof_recall']:.3f} | ({e['spoof_rows']}) | "
+                  f"{100 * e['shared']:.1f} % | {e['rmse_m']:.1f} ({e['rmse_ais_m']:.1f}) | "
+                  f"{e['per_scan_ms']:.2f} | {e['seconds']:.0f}", flush=True)  # fmt: skip
     print(
         "targets: identity >= 99 %, dark P/R >= 0.95 (within 60 s), spoof P/R >= 0.95, "
         "shared >= 95 %"
     )
+    for design, es in rows.items():
+        if es:
+            worst = {k: min(e[k] for e in es) for k in ("identity", "dark_precision",
+                     "dark_recall", "spoof_precision", "spoof_recall", "shared")}  # fmt: skip
+            print(f"untuned seeds, {design}: worst identity {100 * worst['identity']:.2f} %, "
+                  f"dark P/R {worst['dark_precision']:.3f}/{worst['dark_recall']:.3f}, spoof P/R "
+                  f"{worst['spoof_precision']:.3f}/{worst['spoof_recall']:.3f}, shared "
+                  f"{100 * worst['shared']:.1f} %, largest detect "
+                  f"{max(e['detect_max_s'] for e in es):.0f} s, mean RMSE "
+                  f"{np.mean([e['rmse_m'] for e in es]):.1f} m (rows with AIS "
+                  f"{np.mean([e['rmse_ais_m'] for e in es]):.1f} m)")  # fmt: skip
     if not args.quick:
-        s = speed(cov, cfg)
-        print(
-            f"fusion step, 1,000 vessels: median {1e3 * np.median(s):.1f} ms, "
-            f"95th percentile {1e3 * np.percentile(s, 95):.1f} ms per scan (target <= 20 ms); "
-            f"load average {os.getloadavg()[0]:.1f}"
-        )
+        for design in designs:
+            s = speed(cov, replace(cfg, association=design), setup)
+            print(
+                f"fusion step ({design}), 1,000 vessels: median {1e3 * np.median(s):.1f} ms, "
+                f"95th percentile {1e3 * np.percentile(s, 95):.1f} ms per scan (target <= 20 "
+                f"ms); load average {os.getloadavg()[0]:.1f}"
+            )
 
 
 if __name__ == "__main__":

@@ -129,3 +129,24 @@ def test_evaluate(tmp_path):
     assert r.returncode == 0, r.stderr
     api = seatrack.evaluate("linear_cv", methods="ekf,imm", runs=2)
     _same(_read(out, ("method",)), api, skip=("us_per_plot",))
+
+
+@pytest.mark.parametrize("association", ["track", "measurement"])
+def test_fuse(tmp_path, association):
+    """``seatrack fuse --association`` and ``seatrack.fuse(association=...)``: the same three
+    tables (the API's written as the command writes them, six decimals)."""
+    from fusion_samples import write_scene
+    from seatrack.api.fuse import TABLES
+
+    ais, plots, toml = write_scene(tmp_path)
+    out = tmp_path / "out"
+    r = cli("fuse", "--ais", ais, "--plots", plots, "--config", toml, "--out", out,
+            "--association", association)  # fmt: skip
+    assert r.returncode == 0, r.stderr
+    api = seatrack.fuse(ais, plots, toml, association=association)
+    text = ("status", "mmsi", "vessel", "class", "covered", "not_seen", "gap", "jump",
+            "identity_conflict")  # fmt: skip
+    for name in TABLES:
+        mine = tmp_path / f"api_{name}.csv"
+        api[name].to_csv(mine, index=False, float_format="%.6f")
+        _same(_read(out / f"{name}.csv", text), _read(mine, text))

@@ -43,3 +43,18 @@ def test_fuse_takes_tables_as_well_as_files(files) -> None:
     a = fuse(ais, plots, toml)["radar_tracks"]
     b = fuse(pd.read_csv(ais, dtype={"mmsi": str}), pd.read_csv(plots), toml)["radar_tracks"]
     pd.testing.assert_frame_equal(a, b)
+
+
+def test_association_chooses_the_design(files) -> None:
+    """``association="measurement"`` (the AIS reports update the radar tracks) gives the
+    same tables with other radar positions; an unknown design is a ConfigError."""
+    from seatrack.config import ConfigError
+
+    ais, plots, toml = files
+    a = fuse(ais, plots, toml)["radar_tracks"]
+    b = fuse(ais, plots, toml, association="measurement")["radar_tracks"]
+    assert list(a.columns) == list(b.columns)
+    assert set(b[b["class"] == "ais"]["mmsi"]) == {"219000001", "219000002"}
+    assert not a["x_m"].equals(b["x_m"])
+    with pytest.raises(ConfigError, match="association"):
+        fuse(ais, plots, toml, association="plots")

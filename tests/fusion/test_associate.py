@@ -9,10 +9,13 @@ from scipy.stats import multivariate_normal
 from seatrack.fusion.associate import AisStates
 from seatrack.fusion.associate import Associator
 from seatrack.fusion.associate import FusionConfig
+from seatrack.fusion.associate import PairScores
 from seatrack.fusion.associate import assign_pairs
 from seatrack.fusion.associate import identity_probability
+from seatrack.fusion.associate import pair_keys
 from seatrack.fusion.associate import pair_statistics
 from seatrack.fusion.associate import predict_ais
+from seatrack.fusion.associate import report_allowance
 from seatrack.fusion.associate import velocity_covariance
 from seatrack.models.numdiff import numerical_jacobian
 
@@ -98,3 +101,30 @@ def test_config_built_directly_checks_its_keys():
         FusionConfig(sigma_latency=-1.0)
     with pytest.raises(ValueError, match=r"FusionConfig\.gate: must be >= 1"):
         FusionConfig(gate=0.5)
+
+
+def test_pair_scores_accumulate_bounded_and_forget_or_keep() -> None:
+    """Scores add up to ``max_score``; pairs not given are forgotten unless kept; the
+    assigned pair gets the hysteresis bonus at the next assignment."""
+    ps = PairScores(FusionConfig(max_score=10.0, hysteresis=4.0))
+    k = pair_keys(np.array([1, 1, 2]), np.array([5, 6, 5]))
+    assert ps.accumulate(k, np.array([6.0, 1.0, 2.0])).tolist() == [6.0, 1.0, 2.0]
+    assert ps.accumulate(k[:1], np.array([6.0]), keep=np.array([False, False, True])).tolist() == [
+        10.0
+    ]
+    assert ps.keys.tolist() == sorted([k[0], k[2]]) and ps.scores.tolist() == [10.0, 2.0]
+    rows, cols = np.array([0, 1]), np.array([0, 0])  # tracks 1 and 2 both want vessel 5
+    chosen, prob = ps.assign(rows, cols, ps.keys, ps.scores, 2, 1)
+    assert chosen.tolist() == [True, False]
+    assert prob[0] == pytest.approx(np.exp(10) / (1 + np.exp(10) + np.exp(2)))
+    # track 2 now scores higher, but not by more than the incumbent's bonus
+    chosen, _ = ps.assign(rows, cols, ps.keys, np.array([10.0, 13.0]), 2, 1)
+    assert chosen.tolist() == [True, False]
+    chosen, _ = ps.assign(rows, cols, ps.keys, np.array([10.0, 15.0]), 2, 1)
+    assert chosen.tolist() == [False, True]
+
+
+def test_report_allowance_is_offset_plus_latency_along_the_velocity() -> None:
+    vel = np.array([[3.0, 4.0]])
+    np.testing.assert_allclose(report_allowance(vel, 30.0, 2.0)[0],
+                               900.0 * np.eye(2) + 4.0 * np.outer(vel[0], vel[0]))  # fmt: skip

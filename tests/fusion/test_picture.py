@@ -22,12 +22,13 @@ T0 = 1.7e9
 ORIGIN = (56.0, 7.0)  # open North Sea
 
 
-@pytest.fixture(scope="module")
-def scene() -> tuple[Picture, sc.Truth, np.ndarray]:
+@pytest.fixture(scope="module", params=["track", "measurement"])
+def scene(request: pytest.FixtureRequest) -> tuple[Picture, sc.Truth, np.ndarray]:
+    """The scene fused by each association design (every test below holds for both)."""
     setup, cfg = parse_fusion_config({
         "lat_deg": ORIGIN[0], "lon_deg": ORIGIN[1], "max_range_m": 20000.0,
         "sigma_range_m": 20.0, "sigma_azimuth_deg": 0.3, "blind_sectors_deg": [[250.0, 265.0]],
-        "fusion": {"dark_delay_s": 10.0},
+        "fusion": {"dark_delay_s": 10.0, "association": request.param},
     })  # fmt: skip
     cov = Coverage.of(setup.site)
     start = np.array([
@@ -118,6 +119,23 @@ def test_fusion_keys_are_checked() -> None:
     with pytest.raises(ConfigError, match=r"\[fusion\] must be a table"):
         parse_fusion_config({"lat_deg": 56.0, "lon_deg": 7.0, "fusion": 3})
     assert math.isclose(parse_fusion_config({"lat_deg": 1.0, "lon_deg": 2.0})[1].gate, 16.0)
+    with pytest.raises(ConfigError, match="fusion: association"):
+        parse_fusion_config({"lat_deg": 56.0, "lon_deg": 7.0, "fusion": {"association": "x"}})
+
+
+def test_measurement_design_refuses_a_filter_it_cannot_update() -> None:
+    """The measurement design and an IMM per-track filter (states of its own): a
+    ConfigError naming the source."""
+    setup, cfg = parse_fusion_config({"lat_deg": 56.0, "lon_deg": 7.0, "method": "imm",
+                                      "fusion": {"association": "measurement"}})  # fmt: skip
+    truth = sc.straight_truth(np.array([[1000.0, 0.0]]), np.array([90.0]), np.array([10.0]),
+                              T0, 60)  # fmt: skip
+    cov = Coverage.of(setup.site, land=False)
+    rng = np.random.default_rng(0)
+    plots, _ = sc.simulate_plots(truth, np.arange(T0, T0 + 60, 3.0), cov, setup.sensor, 0.0, rng)
+    rep, _ = sc.ais_reports(truth, np.full(1, 6.0), ORIGIN, sc.Corruption(), 10.0, rng)
+    with pytest.raises(ConfigError, match="site.toml: fusion: association"):
+        fuse_picture(rep, plots, setup, cfg, source="site.toml", coverage=cov)
 
 
 def test_track_covariance_lies_along_the_line_of_sight() -> None:

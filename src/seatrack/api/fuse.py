@@ -21,6 +21,7 @@ from seatrack.fusion.picture import Picture
 from seatrack.fusion.picture import fuse_picture
 from seatrack.fusion.picture import load_fusion_config
 from seatrack.fusion.picture import parse_fusion_config
+from seatrack.fusion.picture import with_association
 from seatrack.io.ais import read_ais
 from seatrack.io.multitarget import read_unlabelled_plots
 from seatrack.io.radar import RadarSetup
@@ -81,6 +82,7 @@ def fuse(
     ais: Source | list[str | Path],
     plots: Source,
     config: str | Path | Mapping[str, Any] | tuple[RadarSetup, FusionConfig],
+    association: str | None = None,
 ) -> dict[str, Any]:
     """Fuse AIS reports with radar plots: ``{table name: pandas.DataFrame}`` (:data:`TABLES`).
 
@@ -91,6 +93,10 @@ def fuse(
     plots : unlabelled plots (``time_s`` Unix time, ``range_m``, ``azimuth_deg``): a CSV
         path or a table with those columns.
     config : ``radar.toml`` path, its parsed table, or ``(RadarSetup, FusionConfig)``.
+    association : ``"track"`` (AIS tracks associated with the radar tracks) or
+        ``"measurement"`` (AIS reports update the radar tracks); default: the ``[fusion]``
+        table's ``association`` (itself ``"track"`` by default). docs/fusion.md compares
+        the two.
 
     Raises
     ------
@@ -106,6 +112,8 @@ def fuse(
     else:
         setup, cfg = load_fusion_config(config)
         source = str(config)
+    if association is not None:
+        cfg = with_association(cfg, association)
     with as_file(plots, "plots") as ppath:
         p = read_unlabelled_plots(ppath)
     if isinstance(ais, (list, tuple)) and all(isinstance(x, (str, os.PathLike)) for x in ais):

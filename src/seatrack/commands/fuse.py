@@ -32,6 +32,13 @@ def register(app: typer.Typer) -> None:
             "-o",
             help="folder to write: radar_tracks.csv, ais_vessels.csv, ais_reports.csv",
         ),  # fmt: skip
+        association: str | None = typer.Option(
+            None,
+            "--association",
+            metavar="DESIGN",
+            help="track (AIS tracks associated with radar tracks) or measurement (AIS "
+            "reports update the radar tracks); default: [fusion] association, else track",
+        ),  # fmt: skip
     ) -> None:
         """Fuse radar and AIS: identities, dark vessels, AIS not seen, gaps, shared MMSIs."""
         from seatrack.api.fuse import TABLES
@@ -44,7 +51,7 @@ def register(app: typer.Typer) -> None:
         prepare_outputs(files, [out])
         for p in (*ais, plots, config):
             check_input_file(p)
-        tables = run_fuse(list(ais), plots, config)
+        tables = run_fuse(list(ais), plots, config, association=association)
         with atomic_files(files) as tmp:
             for name, path in zip(TABLES, tmp, strict=True):
                 tables[name].to_csv(path, index=False, float_format="%.6f")

@@ -5,7 +5,9 @@
 * :mod:`~seatrack.fusion.anomalies` -- AIS reporting gaps, shared MMSIs split into
   trajectories, implausible jumps;
 * :mod:`~seatrack.fusion.associate` -- radar tracks and AIS vessels associated scan by
-  scan, with hysteresis;
+  scan, with hysteresis (the default ``track`` design);
+* :mod:`~seatrack.fusion.measurement` -- the ``measurement`` design: AIS reports update
+  the radar tracks they are associated with;
 * :mod:`~seatrack.fusion.picture` -- the whole run: the tables of the picture;
 * :mod:`~seatrack.fusion.scenario` -- simulated plots and corrupted AIS for tests and the
   benchmark.

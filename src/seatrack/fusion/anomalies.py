@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.filters.ais.kernel import vessel_starts
 from seatrack.geometry import KNOT_MPS
 from seatrack.geometry import velocity_from_course
 
@@ -143,8 +144,8 @@ def split_identities(
     conflict = np.zeros(n, bool)
     v_mmsi: list[int] = []
     v_sub: list[int] = []
-    starts = np.flatnonzero(np.r_[True, np.diff(mmsi[order]) != 0]) if n else np.zeros(0, int)
-    for a, b in zip(starts, np.r_[starts[1:], n], strict=True):
+    bounds = vessel_starts(mmsi[order])  # the runs of one MMSI
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
         rows = order[a:b]
         lab, moved = _follow(t[rows], xy[rows], v[rows], cfg)
         sizes = np.bincount(lab)

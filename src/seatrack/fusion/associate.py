@@ -46,6 +46,7 @@ from scipy.spatial import cKDTree
 
 from seatrack.config import Checked
 from seatrack.config import param
+from seatrack.filters.ais.kernel import vessel_starts
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -55,7 +56,12 @@ __all__ = [
     "AisStates",
     "Prediction",
     "Associator",
+    "PairScores",
     "Assignment",
+    "ASSOCIATIONS",
+    "pair_keys",
+    "gate_candidates",
+    "report_allowance",
     "predict_ais",
     "pair_statistics",
     "assign_pairs",
@@ -64,11 +70,20 @@ __all__ = [
 
 _TWO_PI = 2.0 * math.pi
 
+#: the association designs (``association`` key): AIS tracks against radar tracks, or
+#: AIS reports as measurements of the radar tracks (docs/fusion.md)
+ASSOCIATIONS = ("track", "measurement")
+
 
 @dataclass(frozen=True)
 class FusionConfig(Checked):
     """Keys of the ``[fusion]`` table of ``radar.toml`` (docs/fusion.md)."""
 
+    association: str = param(
+        "track", choices=ASSOCIATIONS,
+        doc="track: AIS tracks associated with radar tracks; measurement: AIS reports "
+        "update the radar tracks they are associated with",
+    )  # fmt: skip
     gate: float = param(
         16.0, doc="gate on the squared statistical distance of a radar-AIS pair (2 dof)",
         min=1.0, max=1000.0,
@@ -212,10 +227,22 @@ def predict_ais(states: AisStates, t: float, cfg: FusionConfig) -> Prediction:
         states.pos_cov[k]
         + states.vel_cov[k] * a2
         + (cfg.accel_density * age**3 / 3.0)[:, None, None] * eye
-        + cfg.sigma_antenna_offset**2 * eye
-        + cfg.sigma_latency**2 * np.einsum("ni,nj->nij", vel, vel)
+        + report_allowance(vel, cfg.sigma_antenna_offset, cfg.sigma_latency)
     )
     return Prediction(states.vessel[k], pos, cov, age)
+
+
+def report_allowance(vel: FloatArray, sigma_offset: FloatArray | float,
+                     sigma_time: FloatArray | float) -> FloatArray:  # fmt: skip
+    """Covariance (n, 2, 2) m^2 ``sigma_offset^2 I + sigma_time^2 v v^T`` of an AIS
+    position of velocity ``vel`` (n, 2) m/s: an isotropic offset (m) and a time-stamp
+    error (s) that shifts the position along the velocity."""
+    so = np.broadcast_to(np.asarray(sigma_offset, float), vel.shape[:1])
+    st = np.broadcast_to(np.asarray(sigma_time, float), vel.shape[:1])
+    return np.asarray(
+        (so * so)[:, None, None] * np.eye(2)
+        + (st * st)[:, None, None] * np.einsum("ni,nj->nij", vel, vel)
+    )
 
 
 def pair_statistics(
@@ -259,8 +286,9 @@ def assign_pairs(rows: IntArray, cols: IntArray, weight: FloatArray, n_rows: int
     if multi.size == 0:
         return chosen
     multi = multi[np.argsort(comp[multi], kind="stable")]
-    cuts = np.flatnonzero(np.diff(comp[multi])) + 1
-    for part in np.split(multi, cuts):
+    bounds = vessel_starts(comp[multi])  # the runs of one component
+    for a, b in zip(bounds[:-1], bounds[1:], strict=True):
+        part = multi[a:b]
         r_u, r_i = np.unique(rows[part], return_inverse=True)
         c_u, c_i = np.unique(cols[part], return_inverse=True)
         big = float(weight[part].sum()) + 1.0
@@ -293,18 +321,71 @@ class Assignment:
     identity_prob: FloatArray
 
 
-class Associator:
-    """Pair scores carried from scan to scan (module docstring, steps 2-5).
+class PairScores:
+    """Accumulated log-likelihood ratios of (radar id, AIS id) pairs and the pairs assigned
+    at the last step (module docstring, steps 3-5); shared by both association designs.
 
-    Radar tracks and AIS vessels are named by non-negative integer ids (below 2**31)
-    that stay the same from scan to scan.
+    Ids are non-negative integers below 2**31; a pair is the key ``radar_id << 31 | ais_id``.
     """
 
     def __init__(self, config: FusionConfig) -> None:
         self.config = config
-        self._keys = np.zeros(0, np.int64)  # sorted pair keys radar_id << 31 | ais_id
-        self._scores = np.zeros(0)
-        self._assigned = np.zeros(0, np.int64)  # sorted keys assigned at the previous scan
+        self.keys = np.zeros(0, np.int64)  # sorted pair keys
+        self.scores = np.zeros(0)
+        self.assigned = np.zeros(0, np.int64)  # sorted keys assigned at the last step
+
+    def clear(self) -> None:
+        """Forget every pair."""
+        self.keys, self.scores = np.zeros(0, np.int64), np.zeros(0)
+        self.assigned = np.zeros(0, np.int64)
+
+    def accumulate(self, keys: IntArray, llr: FloatArray,
+                   keep: NDArray[np.bool_] | None = None) -> FloatArray:  # fmt: skip
+        """Add ``llr`` to the scores of the distinct pairs ``keys`` (bounded by
+        ``max_score``) and return their new scores. Stored pairs not in ``keys`` are kept
+        where ``keep`` (aligned with :attr:`keys`) is true, else forgotten (default)."""
+        cap = self.config.max_score
+        score = np.clip(llr + _lookup(self.keys, self.scores, keys, 0.0), -cap, cap)
+        k, s = keys, score
+        if keep is not None and keep.any():
+            old = keep & ~np.isin(self.keys, keys)
+            k, s = np.r_[keys, self.keys[old]], np.r_[score, self.scores[old]]
+        order = np.argsort(k)
+        self.keys, self.scores = k[order], s[order]
+        self.assigned = self.assigned[np.isin(self.assigned, self.keys)]
+        return np.asarray(score)
+
+    def assign(self, rows: IntArray, cols: IntArray, keys: IntArray, score: FloatArray,
+               n_rows: int, n_cols: int) -> tuple[NDArray[np.bool_], FloatArray]:  # fmt: skip
+        """The pairs ``(rows, cols)`` (indices, keys ``keys``, scores ``score``) assigned
+        (:func:`assign_pairs` of ``score`` plus ``hysteresis`` for a pair assigned at the
+        last step, over the pairs with ``score > 0``) and their
+        :func:`identity_probability`; the assigned pairs become the last step's."""
+        was = np.isin(keys, self.assigned)
+        weight = score + self.config.hysteresis * was
+        e = np.flatnonzero(score > 0)
+        chosen = np.zeros(keys.size, bool)
+        chosen[e[assign_pairs(rows[e], cols[e], weight[e], n_rows, n_cols)]] = True
+        prob = identity_probability(rows, cols, score, n_rows, n_cols)
+        self.assigned = np.sort(keys[chosen])
+        return chosen, prob
+
+
+def pair_keys(radar_id: IntArray, ais_id: IntArray) -> IntArray:
+    """The :class:`PairScores` key of each pair: ``radar_id << 31 | ais_id``."""
+    return (radar_id.astype(np.int64) << 31) | ais_id.astype(np.int64)
+
+
+class Associator:
+    """Pair scores carried from scan to scan (module docstring, steps 2-5).
+
+    Radar tracks and AIS vessels are named by non-negative integer ids (below 2**31)
+    that stay the same from scan to scan; a pair not gated at a scan is forgotten.
+    """
+
+    def __init__(self, config: FusionConfig) -> None:
+        self.config = config
+        self.pairs = PairScores(config)
 
     def step(
         self,
@@ -321,43 +402,37 @@ class Associator:
         out_row = np.full(nr, -1, np.int64)
         out_p = np.full(nr, np.nan)
         if nr == 0 or na == 0:
-            self._keys, self._scores, self._assigned = (np.zeros(0, np.int64), np.zeros(0),
-                                                        np.zeros(0, np.int64))  # fmt: skip
+            self.pairs.clear()
             return Assignment(out_row, out_p)
-        i, j = self._candidates(radar_pos, radar_cov, ais_pos, ais_cov)
+        i, j = gate_candidates(radar_pos, radar_cov, ais_pos, ais_cov, cfg.gate)
         d2, llr = pair_statistics(radar_pos[i], radar_cov[i], ais_pos[j], ais_cov[j],
                                   cfg.other_density * 1e-6)  # fmt: skip
         g = d2 <= cfg.gate
         i, j, llr = i[g], j[g], llr[g]
-        keys = (radar_id[i].astype(np.int64) << 31) | ais_id[j].astype(np.int64)
-        score = llr + _lookup(self._keys, self._scores, keys, 0.0)
-        score = np.clip(score, -cfg.max_score, cfg.max_score)
-        order = np.argsort(keys)
-        self._keys, self._scores = keys[order], score[order]
-        was = _lookup(self._assigned, np.ones(self._assigned.size), keys, 0.0) > 0
-        eligible = score > 0
-        weight = score + cfg.hysteresis * was
-        e = np.flatnonzero(eligible)
-        chosen = e[assign_pairs(i[e], j[e], weight[e], nr, na)]
-        prob = identity_probability(i, j, score, nr, na)
+        keys = pair_keys(radar_id[i], ais_id[j])
+        score = self.pairs.accumulate(keys, llr)
+        chosen, prob = self.pairs.assign(i, j, keys, score, nr, na)
         out_row[i[chosen]] = j[chosen]
         out_p[i[chosen]] = prob[chosen]
-        self._assigned = np.sort(keys[chosen])
         return Assignment(out_row, out_p)
 
-    def _candidates(self, zp: FloatArray, zc: FloatArray, ap: FloatArray,
-                    ac: FloatArray) -> tuple[IntArray, IntArray]:  # fmt: skip
-        """Pairs within a Euclidean radius per AIS vessel that contains each of its pairs'
-        Mahalanobis gates (the largest eigenvalue of ``S`` is at most its trace)."""
-        tr_z = zc[:, 0, 0] + zc[:, 1, 1]
-        tr_a = ac[:, 0, 0] + ac[:, 1, 1]
-        radius = np.sqrt(self.config.gate * (float(tr_z.max()) + tr_a))
-        near = cKDTree(zp).query_ball_point(ap, radius, return_sorted=False)
-        counts = np.fromiter((len(x) for x in near), np.int64, ap.shape[0])
-        j = np.repeat(np.arange(ap.shape[0]), counts)
-        i = (np.fromiter((v for x in near for v in x), np.int64, int(counts.sum()))
-             if counts.sum() else np.zeros(0, np.int64))  # fmt: skip
-        return i, j
+
+def gate_candidates(
+    zp: FloatArray, zc: FloatArray, ap: FloatArray, ac: FloatArray, gate: float,
+    extra: FloatArray | float = 0.0,
+) -> tuple[IntArray, IntArray]:  # fmt: skip
+    """Pairs (radar row ``i``, AIS row ``j``) within a Euclidean radius per AIS row that
+    contains each of its pairs' Mahalanobis gates ``d^2 <= gate`` (the largest eigenvalue
+    of ``S = zc_i + ac_j`` is at most its trace), widened by ``extra`` (m, per AIS row)."""
+    tr_z = zc[:, 0, 0] + zc[:, 1, 1]
+    tr_a = ac[:, 0, 0] + ac[:, 1, 1]
+    radius = np.sqrt(gate * (float(tr_z.max()) + tr_a)) + extra
+    near = cKDTree(zp).query_ball_point(ap, radius, return_sorted=False)
+    counts = np.fromiter((len(x) for x in near), np.int64, ap.shape[0])
+    j = np.repeat(np.arange(ap.shape[0]), counts)
+    i = (np.fromiter((v for x in near for v in x), np.int64, int(counts.sum()))
+         if counts.sum() else np.zeros(0, np.int64))  # fmt: skip
+    return i, j
 
 
 def _lookup(keys: IntArray, values: FloatArray, query: IntArray, fill: float) -> FloatArray:

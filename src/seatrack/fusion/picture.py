@@ -1,13 +1,18 @@
 """The fused picture: radar plots and AIS reports in, three tables out (docs/fusion.md).
 
 1. The plots go through the multi-target tracker of the radar's ``radar.toml``
-   (:mod:`seatrack.io.multitarget`), in the radar's East-North plane.
+   (:mod:`seatrack.io.multitarget`), in the radar's East-North plane (scan by scan,
+   between the AIS updates, for the measurement design).
 2. The AIS reports are brought to the same plane (:meth:`Coverage.to_local`), shared MMSIs
    split and jumps removed (:mod:`~seatrack.fusion.anomalies`), and every vessel tracked
    by the project's AIS tracker (:func:`seatrack.filters.ais.track_reports`, forward
    filter only, so that each state uses the reports up to its time).
 3. At every radar scan :class:`Fusion` predicts the AIS vessels, associates them with the
-   radar tracks (:mod:`~seatrack.fusion.associate`) and classes both sides:
+   radar tracks and classes both sides. The association is one of two designs
+   (``association``): ``track`` (default), the tracker's output against the AIS states
+   (:mod:`~seatrack.fusion.associate`); ``measurement``, the tracker run scan by scan with
+   the AIS reports since the last scan updating the tracks they are associated with
+   (:mod:`~seatrack.fusion.measurement`). The classes are the same for both:
 
    * a radar track with an AIS vessel is ``ais``; one inside coverage that has had none
      for ``dark_delay_s`` is ``dark``; otherwise (outside coverage, or waiting) ``unknown``;
@@ -19,9 +24,12 @@
 from __future__ import annotations
 
 import math
+import time
+from collections.abc import Iterator
 from collections.abc import Mapping
 from dataclasses import dataclass
 from dataclasses import fields
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -34,18 +42,27 @@ from seatrack.config import parse_config
 from seatrack.filters.ais import AisTrackerConfig
 from seatrack.filters.ais import track_reports
 from seatrack.filters.ais.kernel import OutlierKind
+from seatrack.filters.ais.noise import position_noise
 from seatrack.filters.ais.tracks import AisTracks
 from seatrack.filters.base import Plots
 from seatrack.filters.base import SensorNoise
+from seatrack.filters.registry import Method
 from seatrack.fusion.anomalies import gap_limits
 from seatrack.fusion.anomalies import reporting_gaps
 from seatrack.fusion.anomalies import split_identities
+from seatrack.fusion.associate import ASSOCIATIONS
 from seatrack.fusion.associate import AisStates
+from seatrack.fusion.associate import Assignment
 from seatrack.fusion.associate import Associator
 from seatrack.fusion.associate import FusionConfig
+from seatrack.fusion.associate import Prediction
 from seatrack.fusion.associate import predict_ais
 from seatrack.fusion.associate import velocity_covariance
 from seatrack.fusion.coverage import Coverage
+from seatrack.fusion.measurement import AisMeasurements
+from seatrack.fusion.measurement import ReportUpdater
+from seatrack.fusion.measurement import check_filter
+from seatrack.fusion.measurement import measurement_noise
 from seatrack.geometry import cart_to_polar
 from seatrack.geometry import enu_to_geodetic
 from seatrack.geometry import rotation_to_beam
@@ -71,10 +88,12 @@ __all__ = [
     "STATE_FIELDS",
     "radar_tracks",
     "track_covariance",
+    "ais_measurements",
     "fuse_picture",
     "CLASSES",
     "parse_fusion_config",
     "load_fusion_config",
+    "with_association",
 ]
 
 #: radar track classes (the ``class`` column)
@@ -134,7 +153,8 @@ def track_covariance(
 @dataclass(frozen=True)
 class AisSide:
     """The AIS reports prepared for fusion, one entry per valid report (``rows`` index the
-    input reports) plus the tracked states (:class:`AisStates`) and per-vessel names."""
+    input reports) plus the tracked states (:class:`AisStates`), per-vessel names and,
+    for the measurement design, the reports as measurements."""
 
     rows: IntArray
     vessel: IntArray
@@ -144,6 +164,7 @@ class AisSide:
     states: AisStates
     vessel_mmsi: IntArray
     vessel_name: NDArray[np.str_]
+    measurements: AisMeasurements | None = None
 
 
 def prepare_ais(reports: AisReports, coverage: Coverage, cfg: FusionConfig) -> AisSide:
@@ -170,6 +191,9 @@ def prepare_ais(reports: AisReports, coverage: Coverage, cfg: FusionConfig) -> A
     k = k[np.lexsort((r.t[k], split.vessel[k]))]
     cols = {f: getattr(tr, f)[k] for f in STATE_FIELDS}
     states = ais_states(coverage, split.vessel[k], r.t[k], cols, limit)
+    meas = None
+    if cfg.association == "measurement":
+        meas = ais_measurements(states, xy[k], np.ones(k.size, bool), cfg)
     names = np.array(
         [
             str(m) if s == 0 else f"{m}#{s + 1}"
@@ -178,7 +202,19 @@ def prepare_ais(reports: AisReports, coverage: Coverage, cfg: FusionConfig) -> A
         dtype=str,
     )
     return AisSide(rows, split.vessel, gap, jump, split.conflict, states, split.vessel_mmsi,
-                   names if names.size else np.zeros(0, str))  # fmt: skip
+                   names if names.size else np.zeros(0, str), meas)  # fmt: skip
+
+
+def ais_measurements(states: AisStates, xy: FloatArray, use: NDArray[np.bool_],
+                     cfg: FusionConfig) -> AisMeasurements:  # fmt: skip
+    """The reports behind ``states`` (their positions ``xy`` (n, 2) m, same rows) as
+    measurements of the radar tracks, sorted by time: the noise of the AIS tracker's model
+    (:func:`~seatrack.filters.ais.noise.position_noise`, from each vessel's ``use`` rows)
+    with the allowances of ``cfg`` (:func:`~seatrack.fusion.measurement.measurement_noise`)."""
+    noise = position_noise(states.vessel, states.t, xy, use, AisTrackerConfig(smooth=False))
+    r = measurement_noise(noise[:, 0], noise[:, 1], states.vel, cfg)
+    o = np.argsort(states.t, kind="stable")
+    return AisMeasurements(states.vessel[o], states.t[o], xy[o], r[o])
 
 
 #: the AIS tracker output columns :func:`ais_states` reads
@@ -258,10 +294,17 @@ class Fusion:
         self.states = states
 
     def step(self, t: float, track: IntArray, pos: FloatArray, cov: FloatArray) -> ScanResult:
-        """Fuse the radar tracks of the scan at ``t`` (ids, positions (n, 2), covariances)."""
-        cfg = self.config
-        pred = predict_ais(self.states, t, cfg)
+        """Fuse the radar tracks of the scan at ``t`` (ids, positions (n, 2), covariances)
+        by the track design (:class:`~seatrack.fusion.associate.Associator`)."""
+        pred = predict_ais(self.states, t, self.config)
         a = self.assoc.step(track, pos, cov, pred.vessel, pred.pos, pred.cov)
+        return self.classify(t, track, pos, pred, a)
+
+    def classify(self, t: float, track: IntArray, pos: FloatArray, pred: Prediction,
+                 a: Assignment) -> ScanResult:  # fmt: skip
+        """The classes of the radar tracks ``track`` (positions ``pos``) and of the AIS
+        vessels ``pred`` predicted to ``t`` given their assignment ``a`` (either design)."""
+        cfg = self.config
         has = a.ais_row >= 0
         if track.size and int(track.max()) >= self._track_clock.size:
             grow = np.full(int(track.max()) + 1 - self._track_clock.size, np.nan)
@@ -326,45 +369,111 @@ class Picture:
 def fuse_picture(reports: AisReports, plots: Plots, setup: RadarSetup,
                  config: FusionConfig | None = None, source: str = "radar config",
                  coverage: Coverage | None = None) -> Picture:  # fmt: skip
-    """Track the plots, prepare the AIS reports and fuse them scan by scan."""
-    import time
-
+    """Prepare the AIS reports, track the plots and fuse them scan by scan by the design
+    of ``config.association`` (docs/fusion.md)."""
     cfg = config or FusionConfig()
+    flt = None
+    if cfg.association == "measurement":  # a filter the design cannot update: refused first
+        flt = make_filter(setup.site.method, setup.method_table, plots, source, setup.tracker)[0]
+        try:
+            check_filter(flt.filter)
+        except ConfigError as exc:
+            raise ConfigError(f"{source}: fusion: {exc}") from None
     cov = coverage or Coverage.of(setup.site, cfg.land_mask, cfg.land_cell)
-    radar = radar_tracks(plots, setup, source)
     ais = prepare_ais(reports, cov, cfg)
     fusion = Fusion(cov, ais.states, cfg)
-    n = radar.t.size
-    r_vessel = np.full(n, -1, np.int64)
-    prob = np.full(n, np.nan)
-    klass = np.zeros(n, np.int8)
-    r_cov = np.zeros(n, bool)
-    parts: list[tuple[NDArray[Any], ...]] = []
+    if flt is not None:
+        scans = list(_measurement_scans(plots, setup, flt, ais, fusion))
+    else:
+        scans = list(_track_scans(plots, setup, fusion, source))
+    empty = np.zeros(0, np.int64)
+    radar = RadarTracks(
+        *(np.concatenate([getattr(s.radar, f.name) for s in scans]) if scans else z
+          for f, z in zip(fields(RadarTracks), (empty, np.zeros(0), np.zeros(0, str),
+                                                np.zeros((0, 2)), np.zeros((0, 2, 2))),
+                          strict=True))
+    )  # fmt: skip
+    res = [s.result for s in scans]
+
+    def cat(name: str, dtype: Any, shape: tuple[int, ...] = (0,)) -> NDArray[Any]:
+        parts = [getattr(x, name) for x in res]
+        return np.concatenate(parts).astype(dtype) if parts else np.zeros(shape, dtype)
+
+    trk = [np.where(s.result.radar_row >= 0, s.radar.track[np.maximum(s.result.radar_row, 0)]
+                    if s.radar.track.size else -1, -1) for s in scans]  # fmt: skip
+    v_time = [np.full(s.result.vessel.size, s.radar_t) for s in scans]
+    origin = (math.degrees(setup.site.lat), math.degrees(setup.site.lon))
+    return Picture(
+        radar, cat("ais_vessel", np.int64), cat("identity_prob", float), cat("klass", np.int8),
+        cat("covered", bool), ais, reports,
+        np.concatenate(v_time) if scans else np.zeros(0), cat("vessel", np.int64),
+        cat("pos", float, (0, 2)).reshape(-1, 2), cat("vessel_covered", bool),
+        np.concatenate(trk).astype(np.int64) if scans else empty, cat("not_seen", bool),
+        origin, np.array([s.seconds for s in scans]),
+    )  # fmt: skip
+
+
+@dataclass(frozen=True)
+class _Scan:
+    """One scan of the run: its time, radar rows, fusion result and the wall time (s) of
+    the fusion step."""
+
+    radar_t: float
+    radar: RadarTracks
+    result: ScanResult
+    seconds: float
+
+
+def _track_scans(plots: Plots, setup: RadarSetup, fusion: Fusion,
+                 source: str) -> Iterator[_Scan]:  # fmt: skip
+    """The track design: the whole tracker run, then :meth:`Fusion.step` at each scan."""
+    radar = radar_tracks(plots, setup, source)
     scan_times = np.unique(plots.t)
     bounds = np.searchsorted(radar.t, scan_times), np.searchsorted(radar.t, scan_times, "right")
-    seconds = np.zeros(scan_times.size)
-    empty = np.zeros(0, np.int64)
-    for s, (t, a, b) in enumerate(zip(scan_times, *bounds, strict=True)):
+    for t, a, b in zip(scan_times, *bounds, strict=True):
+        rows = RadarTracks(*(getattr(radar, f.name)[a:b] for f in fields(RadarTracks)))
         tic = time.perf_counter()
-        sl = slice(int(a), int(b))
-        res = fusion.step(float(t), radar.track[sl] if b > a else empty, radar.pos[sl],
-                          radar.cov[sl])  # fmt: skip
-        seconds[s] = time.perf_counter() - tic
-        r_vessel[sl], prob[sl], klass[sl], r_cov[sl] = (res.ais_vessel, res.identity_prob,
-                                                       res.klass, res.covered)  # fmt: skip
-        trk = np.where(res.radar_row >= 0, radar.track[sl][np.maximum(res.radar_row, 0)]
-                       if b > a else -1, -1)  # fmt: skip
-        parts.append((np.full(res.vessel.size, t), res.vessel, res.pos, res.vessel_covered,
-                      trk, res.not_seen))  # fmt: skip
-    cat = (
-        [np.concatenate(c) if c else np.zeros(0) for c in zip(*parts, strict=True)]
-        if parts
-        else [np.zeros(0), empty, np.zeros((0, 2)), np.zeros(0, bool), empty, np.zeros(0, bool)]
-    )
-    origin = (math.degrees(setup.site.lat), math.degrees(setup.site.lon))
-    return Picture(radar, r_vessel, prob, klass, r_cov, ais, reports, cat[0],
-                   cat[1].astype(np.int64), cat[2].reshape(-1, 2), cat[3].astype(bool),
-                   cat[4].astype(np.int64), cat[5].astype(bool), origin, seconds)  # fmt: skip
+        res = fusion.step(float(t), rows.track, rows.pos, rows.cov)
+        yield _Scan(float(t), rows, res, time.perf_counter() - tic)
+
+
+def _measurement_scans(plots: Plots, setup: RadarSetup, flt: Method, ais: AisSide,
+                       fusion: Fusion) -> Iterator[_Scan]:  # fmt: skip
+    """The measurement design: at each scan the AIS reports since the last one update the
+    confirmed radar tracks (:class:`~seatrack.fusion.measurement.ReportUpdater`), the
+    tracker (per-track filter ``flt``) takes the scan's plots and :meth:`Fusion.classify`
+    the reported tracks."""
+    updater = ReportUpdater(flt.filter, ais.measurements or _no_reports(), fusion.config)
+    tracker = MultiTargetTracker(flt.filter, setup.sensor, setup.tracker)
+    prepared = flt.prepare(plots)
+    order = np.argsort(prepared.t, kind="stable")
+    times, starts = np.unique(prepared.t[order], return_index=True)
+    bounds = np.append(starts, order.size)
+    labels = np.array([s.label for s in TrackStatus])
+    for k, t in enumerate(times):
+        tic = time.perf_counter()
+        if tracker.state is not None:
+            tr = tracker.tracks
+            tracker.state = updater.update(tracker.state, tr.id, tr.confirmed, float(t))
+        else:
+            updater.skip(float(t))
+        seconds = time.perf_counter() - tic
+        res = tracker.step(float(t), prepared.take(order[bounds[k] : bounds[k + 1]]))
+        tic = time.perf_counter()
+        rep = np.flatnonzero(res.status != int(TrackStatus.TENTATIVE))
+        st = res.state.take(rep)
+        rows = RadarTracks(res.track[rep].astype(np.int64), np.full(rep.size, float(t)),
+                           labels[res.status[rep]], st.x[:, :2], st.P[:, :2, :2])  # fmt: skip
+        pred = predict_ais(fusion.states, float(t), fusion.config)
+        updater.prune(res.track, pred.vessel)
+        a = updater.assignment(rows.track, pred.vessel)
+        out = fusion.classify(float(t), rows.track, rows.pos, pred, a)
+        yield _Scan(float(t), rows, out, seconds + time.perf_counter() - tic)
+
+
+def _no_reports() -> AisMeasurements:
+    return AisMeasurements(np.zeros(0, np.int64), np.zeros(0), np.zeros((0, 2)),
+                           np.zeros((0, 2, 2)))  # fmt: skip
 
 
 def parse_fusion_config(
@@ -378,6 +487,14 @@ def parse_fusion_config(
         raise ConfigError(f"{source}: [fusion] must be a table")
     setup = parse_radar_config(rest, source)
     return setup, parse_config(FusionConfig, tab, source=f"{source}: fusion")
+
+
+def with_association(cfg: FusionConfig, association: str) -> FusionConfig:
+    """``cfg`` with the association design ``association`` (one of
+    :data:`~seatrack.fusion.associate.ASSOCIATIONS`; ConfigError otherwise)."""
+    if association not in ASSOCIATIONS:
+        raise ConfigError(f"association: {association!r} is not one of {', '.join(ASSOCIATIONS)}")
+    return replace(cfg, association=association)
 
 
 def load_fusion_config(path: str | Path) -> tuple[RadarSetup, FusionConfig]:

@@ -108,22 +108,25 @@ class Picture:
             self._put(f"ais:{m}", tr.lat[k], tr.lon[k], props)
 
     def set_radar(self, tracks: list[RadarTrackView]) -> None:
-        """Replace the radar tracks (after a scan)."""
+        """Replace the radar tracks (after a scan); a track keeps its fusion properties
+        until the fusion of the new scan arrives (:meth:`set_fusion`)."""
         keep = set()
         for r in tracks:
             fid = f"radar:{r.track_id}"
             keep.add(fid)
+            old = self.features.get(fid)
+            fused = old["properties"] if old is not None and self.fused else {}
             props = {
                 "source": "radar",
-                "mmsi": None,
+                "mmsi": fused.get("mmsi"),
                 "time_utc": time_utc(r.t),
                 "sog_kn": _num(r.speed / KNOT_MPS, 2),
                 "cog_deg": _num(bearing_rad_to_deg(r.course), 1),
                 "status": "confirmed" if r.confirmed else "tentative",
                 "std_m": _num(r.std_m, 2),
                 "name": "",
-                "identity_prob": None,
-                "class": None,
+                "identity_prob": fused.get("identity_prob"),
+                "class": fused.get("class"),
             }
             self._put(fid, r.lat, r.lon, props)
         for fid in [f for f in self.features if f.startswith("radar:") and f not in keep]:

@@ -9,8 +9,10 @@ together with the picture (:mod:`seatrack.live.counters`). Radar chunks go to
 :class:`~seatrack.live.radar.LiveRadar` when a radar is configured. A ticker closes timed
 out scans and fragments, refreshes the picture and feeds the web clients, the NMEA output
 and the store once a second or faster.
-With AIS and radar inputs, every closed scan runs one radar-AIS fusion step
-(:class:`~seatrack.live.fusion.LiveFusion`) on the AIS states emitted so far.
+With AIS and radar inputs, every closed scan is handed to the radar-AIS fusion
+(:class:`~seatrack.live.fusion.LiveFusion`) with the AIS states emitted so far; it runs in
+a worker thread fed by a bounded queue of scans (the newest wins, drops counted), and the
+picture takes its result at the next refresh.
 """
 
 from __future__ import annotations
@@ -59,6 +61,7 @@ class LiveOptions:
     commit_s: float = 0.5
     ais_config: Any = None
     fusion: Any = None  # FusionConfig of radar.toml's [fusion] table (default: defaults)
+    fusion_queue: int = 1  # scans waiting for the fusion worker at most
 
 
 class LiveProcess:
@@ -89,10 +92,11 @@ class LiveProcess:
             self._open_store(opts.store)
         self.fusion: Any = None
         self._fusion_emitted = False  # the fusion, not the store, empties ais.emitted
+        self._fusion_seen = 0  # the fusion's result version shown in the picture
         if opts.ais and self.radar is not None:
             from seatrack.live.fusion import LiveFusion
 
-            self.fusion = LiveFusion(opts.radar, opts.fusion)
+            self.fusion = LiveFusion(opts.radar, opts.fusion, opts.fusion_queue)
             self.radar.listeners.append(self.fusion.scan)
             self.picture.fused = True
             if self.ais.emitted is None:
@@ -249,8 +253,9 @@ class LiveProcess:
         if self.radar is not None and self.radar.changed:
             self.picture.set_radar(self.radar.current)
             self.radar.changed = False
-            if self.fusion is not None:
-                self.picture.set_fusion(self.fusion.tracks, self.fusion.not_seen)
+        if self.fusion is not None and self.fusion.version != self._fusion_seen:
+            self._fusion_seen = self.fusion.version
+            self.picture.set_fusion(self.fusion.tracks, self.fusion.not_seen)
         changes = self.picture.take_changes()
         if changes is not None:
             for fn in self.listeners:
@@ -265,6 +270,11 @@ class LiveProcess:
             h["dark"] = self.fusion.n_dark
             h["not_seen"] = len(self.fusion.not_seen)
             h["fusion_ms"] = self.fusion.latency.percentiles_ms()
+            h["fusion_scans"] = self.fusion.version
+            h["fusion_scans_dropped"] = self.fusion.dropped
+            h["fusion_waiting"] = self.fusion.waiting
+            if self.fusion.errors:
+                h["fusion_errors"] = dict(self.fusion.errors)
         if self.radar is not None and self.radar.listener_errors:
             h["scan_consumer_errors"] = dict(self.radar.listener_errors)
         h["pending_fragments"] = self.assembler.pending
@@ -282,6 +292,8 @@ class LiveProcess:
         def reconnected() -> None:
             cnt.reconnects += 1
 
+        if self.fusion is not None:
+            self.fusion.start()
         self._tasks.append(asyncio.create_task(self.consume()))
         self._tasks.append(asyncio.create_task(self.tick()))
         if self.store is not None:
@@ -307,6 +319,8 @@ class LiveProcess:
         await self.queue.join()
         if self.radar is not None:
             self.radar.flush()
+        if self.fusion is not None:
+            await asyncio.to_thread(self.fusion.wait_idle)
         self.refresh()
 
     async def stop(self) -> None:
@@ -319,6 +333,8 @@ class LiveProcess:
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await t
         self._tasks.clear()
+        if self.fusion is not None:
+            await asyncio.to_thread(self.fusion.close)
         if self.nmea_out is not None:
             self.nmea_out.close()
         if self.store is not None:

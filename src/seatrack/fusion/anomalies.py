@@ -36,7 +36,15 @@ from seatrack.geometry import velocity_from_course
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-__all__ = ["SplitConfig", "Split", "split_identities", "reporting_gaps", "gap_limits"]
+__all__ = [
+    "SplitConfig",
+    "Split",
+    "Trajectories",
+    "follow_report",
+    "split_identities",
+    "reporting_gaps",
+    "gap_limits",
+]
 
 
 @dataclass(frozen=True)
@@ -72,47 +80,73 @@ class Split:
     vessel_sub: IntArray
 
 
+@dataclass
+class Trajectories:
+    """The trajectories of one MMSI followed so far: per trajectory its last report's
+    time ``t`` (s), position ``xy`` (m) and velocity ``v`` (m/s; NaN unknown)."""
+
+    t: list[float]
+    xy: list[FloatArray]
+    v: list[FloatArray]
+
+    @classmethod
+    def empty(cls) -> Trajectories:
+        return cls([], [], [])
+
+
+def follow_report(
+    tr: Trajectories, t: float, xy: FloatArray, v: FloatArray, cfg: SplitConfig
+) -> tuple[int, bool]:
+    """Trajectory label of the MMSI's next report (time order) at ``t``, ``xy``, ``v``,
+    and whether it started a new trajectory while another was alive or out of reach (an
+    implausible move); ``tr`` is updated (module docstring). Used report by report by
+    :func:`split_identities` and by a live process."""
+    best, best_err = -1, np.inf
+    for j in range(len(tr.t)):
+        dt = t - tr.t[j]
+        if dt > cfg.expiry:
+            continue
+        step = float(np.hypot(*(xy - tr.xy[j])))
+        if step > cfg.max_speed * dt + cfg.slack:
+            continue
+        vk = tr.v[j] if np.isfinite(tr.v[j]).all() else np.zeros(2)
+        err = float(np.hypot(*(xy - tr.xy[j] - vk * dt)))
+        if err < best_err:
+            best, best_err = j, err
+    moved = False
+    if best < 0:
+        alive = [j for j in range(len(tr.t)) if t - tr.t[j] <= cfg.expiry]
+        latest = max(range(len(tr.t)), key=tr.t.__getitem__) if tr.t else -1
+        reach = (
+            latest >= 0
+            and float(np.hypot(*(xy - tr.xy[latest])))
+            <= cfg.max_speed * (t - tr.t[latest]) + cfg.slack
+        )
+        moved = bool(alive) or (latest >= 0 and not reach)
+        if not alive and reach:  # after a long silence, within reach: continued
+            best = latest
+        elif len(alive) >= cfg.max_trajectories:  # no room: the stalest one is replaced
+            best = min(alive, key=tr.t.__getitem__)
+        else:
+            best = len(tr.t)
+            tr.t.append(t)
+            tr.xy.append(xy)
+            tr.v.append(v)
+    tr.t[best], tr.xy[best], tr.v[best] = t, xy, v
+    return best, moved
+
+
 def _follow(
     t: FloatArray, xy: FloatArray, v: FloatArray, cfg: SplitConfig
 ) -> tuple[IntArray, NDArray[np.bool_]]:
     """Trajectory label of each report of one MMSI (time order), and whether the report
-    started a new trajectory while another was alive (an implausible move); see the
-    module docstring."""
+    started a new trajectory while another was alive (:func:`follow_report`)."""
     n = t.size
     label = np.empty(n, np.int64)
     moved = np.zeros(n, bool)
-    last: list[int] = []  # last report of each trajectory
+    tr = Trajectories.empty()
     for i in range(n):
-        best, best_err = -1, np.inf
-        for j, k in enumerate(last):
-            dt = t[i] - t[k]
-            if dt > cfg.expiry:
-                continue
-            step = float(np.hypot(*(xy[i] - xy[k])))
-            if step > cfg.max_speed * dt + cfg.slack:
-                continue
-            vk = v[k] if np.isfinite(v[k]).all() else np.zeros(2)
-            err = float(np.hypot(*(xy[i] - xy[k] - vk * dt)))
-            if err < best_err:
-                best, best_err = j, err
-        if best < 0:
-            alive = [j for j, k in enumerate(last) if t[i] - t[k] <= cfg.expiry]
-            latest = max(range(len(last)), key=lambda j: t[last[j]]) if last else -1
-            reach = (
-                latest >= 0
-                and float(np.hypot(*(xy[i] - xy[last[latest]])))
-                <= cfg.max_speed * (t[i] - t[last[latest]]) + cfg.slack
-            )
-            moved[i] = bool(alive) or (latest >= 0 and not reach)
-            if not alive and reach:  # after a long silence, within reach: continued
-                best = latest
-            elif len(alive) >= cfg.max_trajectories:  # no room: the stalest one is replaced
-                best = min(alive, key=lambda j: t[last[j]])
-            else:
-                best = len(last)
-                last.append(i)
-        last[best] = i
-        label[i] = best
+        label[i], moved[i] = follow_report(tr, float(t[i]), xy[i], v[i], cfg)
     return label, moved
 
 

@@ -61,7 +61,8 @@ _PLANE = 12  # a state in the radar's plane: pos (2), vel (2), pos_cov (4), vel_
 
 
 class FusedTrack(NamedTuple):
-    """A radar track's fusion result at a scan: its AIS vessel's MMSI and identity
+    """A radar track's fusion result at a scan: its AIS vessel's key (the MMSI, or for a
+    shared MMSI's further vessels :func:`~seatrack.live.identity.vessel_key`) and identity
     probability (None: none) and class (``ais`` | ``dark`` | ``unknown``)."""
 
     mmsi: int | None

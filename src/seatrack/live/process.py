@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import asyncio
 import contextlib
+import math
 import time
 from dataclasses import dataclass
 from dataclasses import field
@@ -27,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from seatrack.geometry import KNOT_MPS
 from seatrack.io.ais.reports import TIME_MAX
 from seatrack.io.ais.reports import TIME_MIN
 from seatrack.live.ais import LiveAis
@@ -73,6 +75,7 @@ class LiveProcess:
         self.assembler = Assembler()
         self.duplicates = Duplicates(opts.window_s)
         self.ais = LiveAis(opts.ais_config, opts.window_s)
+        self.identities = _identities(opts)  # shared MMSIs split, AIS anomalies flagged
         self.names: dict[int, str] = {}
         self.picture = Picture()
         self.queue: asyncio.Queue[Chunk] = asyncio.Queue(opts.queue_size)
@@ -122,6 +125,10 @@ class LiveProcess:
         self.writer = StoreWriter(self.store)
         self.ais.emitted = []
         self.restored = self.writer.restore(self.ais, self.radar, self.counters)
+        if self.ais.vessels:  # each MMSI's split goes on from its restored vessels
+            keys, tr, t = self.ais.tracks()
+            self.identities.resume(keys, t, tr.lat, tr.lon, tr.speed / KNOT_MPS,
+                                   np.degrees(tr.course))  # fmt: skip
         self.restore_s = time.perf_counter() - t0
         self.names.update({m: v.name for m, v in self.ais.vessels.items() if v.name})
         if self.radar is not None:
@@ -198,11 +205,9 @@ class LiveProcess:
             return
         emitted = self.ais.emitted if self.fusion is not None else None
         n0 = 0 if emitted is None else len(emitted)
-        rows = np.array([(d.lat, d.lon, d.sog_kn, d.cog_deg, m.time_s) for d, m in pos])
-        used = self.ais.add(
-            np.array([d.mmsi for d, _ in pos], dtype=np.int64), rows[:, 4], rows[:, 0],
-            rows[:, 1], rows[:, 2], rows[:, 3],
-        )  # fmt: skip
+        rows = np.array([(m.time_s, d.lat, d.lon, d.sog_kn, d.cog_deg) for d, m in pos])
+        keys = self.identities.route(np.array([d.mmsi for d, _ in pos], np.int64), rows)
+        used = self.ais.add(keys, rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4])
         if self.fusion is not None and emitted is not None:  # every used report's state
             self.fusion.add_estimates(emitted[n0:])
             if self._fusion_emitted:
@@ -249,7 +254,7 @@ class LiveProcess:
 
     def refresh(self) -> None:
         """Update the picture from the trackers and hand the changes to the listeners."""
-        self.picture.refresh_ais(self.ais, self.names)
+        self.picture.refresh_ais(self.ais, self.names, self.identities)
         if self.radar is not None and self.radar.changed:
             self.picture.set_radar(self.radar.current)
             self.radar.changed = False
@@ -277,6 +282,7 @@ class LiveProcess:
                 h["fusion_errors"] = dict(self.fusion.errors)
         if self.radar is not None and self.radar.listener_errors:
             h["scan_consumer_errors"] = dict(self.radar.listener_errors)
+        h["ais_flags"] = dict(self.identities.counts)
         h["pending_fragments"] = self.assembler.pending
         h["queue"] = self.queue.qsize()
         if self.store is not None:
@@ -345,3 +351,16 @@ class LiveProcess:
                 await self.commit()
             self.store.close()
             self.store = None
+
+
+def _identities(opts: LiveOptions) -> Any:
+    """The causal MMSI split of the process: in the radar's plane when there is one, the
+    gap keys of its ``[fusion]`` table."""
+    from seatrack.fusion.associate import FusionConfig
+    from seatrack.live.identity import LiveIdentities
+
+    cfg = opts.fusion or FusionConfig()
+    origin = None
+    if opts.radar is not None:
+        origin = (math.degrees(opts.radar.site.lat), math.degrees(opts.radar.site.lon))
+    return LiveIdentities(origin, cfg.gap_factor, cfg.min_gap)

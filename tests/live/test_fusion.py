@@ -98,6 +98,8 @@ def test_live_fusion_classes_ais_and_dark_vessels(scene):
     assert len(by_class["dark"]) == 1 and by_class["dark"][0]["mmsi"] is None
     assert by_class["dark"][0]["identity_prob"] is None
     assert all(p["not_seen"] is False for p in ais)
+    assert all(p["sub"] == 0 and not (p["gap"] or p["jump"] or p["identity_conflict"])
+               for p in ais)  # fmt: skip
     h = scene["health"]
     assert h["dark"] == 1 and h["not_seen"] == 0 and h["radar_tracks"] == len(radar)
     assert h["fusion_ms"]["p99"] is not None

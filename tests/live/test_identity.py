@@ -102,3 +102,42 @@ def test_flags_shown_on_the_vessel_and_keys():
     ids.route(np.array([219000001]), np.array([[T0 + 200, 56.01, 7.0006, 2.0, 90.0]]))
     assert ids.describe(219000001)["gap"]  # 140 s silent at 10 s reports
     assert vessel_key(219000001, 2) == 2219000001 and split_key(2219000001) == (219000001, 2)
+
+
+def test_a_shared_mmsi_becomes_two_ais_features_over_udp():
+    """A live process fed the scene's shared MMSI over UDP shows two AIS vessels,
+    ``ais:MMSI`` and ``ais:MMSI#2``, both in identity conflict, and counts the flags."""
+    import asyncio
+
+    from live.streams import started
+    from live.streams import udp_send
+    from live.streams import wait_for
+    from seatrack.live.nmea import encode_report
+    from seatrack.live.process import LiveOptions
+    from seatrack.live.sources import Source
+
+    rep = scene()
+    shared = int(np.bincount(rep.mmsi - rep.mmsi.min()).argmax() + rep.mmsi.min())
+    k = np.flatnonzero(rep.mmsi == shared)[:60]
+    lines = [s for i in k for s in encode_report(shared, float(rep.t[i]), float(rep.lat[i]),
+             float(rep.lon[i]), float(rep.sog_kn[i]), float(rep.cog_deg[i]))]  # fmt: skip
+
+    async def go():
+        proc = await started(LiveOptions(ais=[Source("udp", "127.0.0.1", 0)]))
+        for j in range(0, len(lines), 10):
+            udp_send(proc.udp_ports[0], [b"\n".join(lines[j : j + 10])])
+            await asyncio.sleep(0.002)
+        await wait_for(lambda: proc.counters.received == len(lines))
+        await proc.drain()
+        feats = proc.picture.collection()["features"]
+        health = proc.health()
+        await proc.stop()
+        return feats, health
+
+    feats, health = asyncio.run(asyncio.wait_for(go(), 20))
+    props = {f["id"]: f["properties"] for f in feats}
+    assert set(props) == {f"ais:{shared}", f"ais:{shared}#2"}
+    assert [props[f"ais:{shared}"]["sub"], props[f"ais:{shared}#2"]["sub"]] == [0, 1]
+    assert all(p["mmsi"] == shared and p["identity_conflict"] for p in props.values())
+    assert not any(p["gap"] or p["jump"] for p in props.values())
+    assert health["ais_flags"]["identity_conflict"] > 0 and health["decoded"] == len(lines)

@@ -138,6 +138,7 @@ class LiveFusion:
         self.times: list[list[float]] = []  # per vessel: report times (for the gap limit)
         self.limit: list[float] = []  # per vessel: gap limit (s)
         self._stale: set[int] = set()  # vessels whose gap limit needs recomputing
+        self._raw: dict[tuple[int, float], None] = {}  # (vessel, time) of raw states
         self.fusion = Fusion(self.coverage, self._states(), self.config)
         # results, replaced whole by the worker (read by the event loop)
         self.tracks: dict[int, FusedTrack] = {}  # radar track id -> result at the last scan
@@ -283,6 +284,7 @@ class LiveFusion:
                 del times[0]
             if kind == 0:
                 rows[tk] = raw
+                self._raw[j, tk] = None
                 if len(rows) > HISTORY:  # bounded without scans: the oldest (in time order)
                     del rows[next(iter(rows))]
 
@@ -302,7 +304,9 @@ class LiveFusion:
         """The raw states recorded since the last scan, in the radar's plane (each state
         converted once); those without a position and velocity are dropped (as in the
         batch fusion)."""
-        new = [(r, s) for r in self.rows for s, v in r.items() if len(v) == _RAW]
+        rows = self.rows
+        new = [(rows[j], s) for j, s in self._raw if len(rows[j].get(s, ())) == _RAW]
+        self._raw.clear()
         if not new:
             return
         a = np.array([r[s] for r, s in new], float)

@@ -25,6 +25,7 @@ Positions are metres in one East-North plane (the radar's); times seconds.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -86,8 +87,8 @@ class Trajectories:
     time ``t`` (s), position ``xy`` (m) and velocity ``v`` (m/s; NaN unknown)."""
 
     t: list[float]
-    xy: list[FloatArray]
-    v: list[FloatArray]
+    xy: list[tuple[float, float]]
+    v: list[tuple[float, float]]
 
     @classmethod
     def empty(cls) -> Trajectories:
@@ -95,33 +96,36 @@ class Trajectories:
 
 
 def follow_report(
-    tr: Trajectories, t: float, xy: FloatArray, v: FloatArray, cfg: SplitConfig
-) -> tuple[int, bool]:
+    tr: Trajectories, t: float, xy: tuple[float, float], v: tuple[float, float],
+    cfg: SplitConfig,
+) -> tuple[int, bool]:  # fmt: skip
     """Trajectory label of the MMSI's next report (time order) at ``t``, ``xy``, ``v``,
     and whether it started a new trajectory while another was alive or out of reach (an
     implausible move); ``tr`` is updated (module docstring). Used report by report by
-    :func:`split_identities` and by a live process."""
-    best, best_err = -1, np.inf
-    for j in range(len(tr.t)):
-        dt = t - tr.t[j]
+    :func:`split_identities` and by a live process (plain floats: a few microseconds)."""
+    x, y = xy
+    best, best_err = -1, math.inf
+    for j, tj in enumerate(tr.t):
+        dt = t - tj
         if dt > cfg.expiry:
             continue
-        step = float(np.hypot(*(xy - tr.xy[j])))
-        if step > cfg.max_speed * dt + cfg.slack:
+        xj, yj = tr.xy[j]
+        if math.hypot(x - xj, y - yj) > cfg.max_speed * dt + cfg.slack:
             continue
-        vk = tr.v[j] if np.isfinite(tr.v[j]).all() else np.zeros(2)
-        err = float(np.hypot(*(xy - tr.xy[j] - vk * dt)))
+        vx, vy = tr.v[j]
+        if not (math.isfinite(vx) and math.isfinite(vy)):
+            vx = vy = 0.0
+        err = math.hypot(x - xj - vx * dt, y - yj - vy * dt)
         if err < best_err:
             best, best_err = j, err
     moved = False
     if best < 0:
-        alive = [j for j in range(len(tr.t)) if t - tr.t[j] <= cfg.expiry]
+        alive = [j for j, tj in enumerate(tr.t) if t - tj <= cfg.expiry]
         latest = max(range(len(tr.t)), key=tr.t.__getitem__) if tr.t else -1
-        reach = (
-            latest >= 0
-            and float(np.hypot(*(xy - tr.xy[latest])))
-            <= cfg.max_speed * (t - tr.t[latest]) + cfg.slack
-        )
+        reach = False
+        if latest >= 0:
+            xl, yl = tr.xy[latest]
+            reach = math.hypot(x - xl, y - yl) <= cfg.max_speed * (t - tr.t[latest]) + cfg.slack
         moved = bool(alive) or (latest >= 0 and not reach)
         if not alive and reach:  # after a long silence, within reach: continued
             best = latest
@@ -145,8 +149,8 @@ def _follow(
     label = np.empty(n, np.int64)
     moved = np.zeros(n, bool)
     tr = Trajectories.empty()
-    for i in range(n):
-        label[i], moved[i] = follow_report(tr, float(t[i]), xy[i], v[i], cfg)
+    for i, (ti, p, u) in enumerate(zip(t.tolist(), xy.tolist(), v.tolist(), strict=True)):
+        label[i], moved[i] = follow_report(tr, ti, (p[0], p[1]), (u[0], u[1]), cfg)
     return label, moved
 
 

@@ -29,10 +29,13 @@ when its trajectory becomes a vessel), from what is known then:
 
 from __future__ import annotations
 
+import bisect
 import math
+from collections import deque
 from dataclasses import dataclass
 from dataclasses import field
 from typing import Any
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import NDArray
@@ -40,7 +43,6 @@ from numpy.typing import NDArray
 from seatrack.fusion.anomalies import SplitConfig
 from seatrack.fusion.anomalies import Trajectories
 from seatrack.fusion.anomalies import follow_report
-from seatrack.fusion.anomalies import gap_limits
 from seatrack.geometry import KNOT_MPS
 from seatrack.geometry import geodetic_to_enu
 from seatrack.geometry import velocity_from_course
@@ -65,8 +67,7 @@ def split_key(key: int) -> tuple[int, int]:
     return int(key) % SUB_STEP, int(key) // SUB_STEP
 
 
-@dataclass(frozen=True)
-class Flags:
+class Flags(NamedTuple):
     """The anomaly flags of a vessel's last report (see the module docstring)."""
 
     gap: bool = False
@@ -81,7 +82,16 @@ class _Trajectory:
     last_t: float = -math.inf
     moved: list[bool] = field(default_factory=list)  # per held report
     held_rows: list[tuple[float, ...]] = field(default_factory=list)  # held reports
-    times: list[float] = field(default_factory=list)  # last HISTORY report times
+    prev_t: float = math.nan  # time of the vessel's last tracked report
+    intervals: deque[float] = field(default_factory=deque)  # the last HISTORY - 1
+    sorted_intervals: list[float] = field(default_factory=list)  # the same, sorted
+
+    def limit(self, gap_factor: float, min_gap_s: float) -> float:
+        """:func:`~seatrack.fusion.anomalies.gap_limits` of the intervals kept (s)."""
+        d, m = self.sorted_intervals, len(self.sorted_intervals)
+        if m == 0:
+            return min_gap_s
+        return max(gap_factor * (0.5 * (d[(m - 1) // 2] + d[m // 2])), min_gap_s)
 
 
 @dataclass
@@ -130,19 +140,21 @@ class LiveIdentities:
         """The tracking key of each position report (arrival order; ``rows`` (n, 5): time
         s, lat, lon deg, SOG kn, COG deg, NaN unknown)."""
         n = mmsi.size
-        xy = self._plane(mmsi, rows[:, 1], rows[:, 2])
+        xy = self._plane(mmsi, rows[:, 1], rows[:, 2]).tolist()
         v = velocity_from_course(np.radians(rows[:, 4]), rows[:, 3] * KNOT_MPS).reshape(n, 2)
+        vs = v.tolist()
         out_key = np.empty(n, np.int64)
-        for i in range(n):
-            m = int(mmsi[i])
-            st = self.mmsis.setdefault(m, _Mmsi())
-            t = float(rows[i, 0])
-            row = tuple(rows[i].tolist())
+        for i, (m, row) in enumerate(zip(mmsi.tolist(), rows.tolist(), strict=True)):
+            st = self.mmsis.get(m)
+            if st is None:
+                st = self.mmsis[m] = _Mmsi()
+            t = row[0]
+            p = (xy[i][0], xy[i][1])
             if t < st.latest_t:  # out of order: to the vessel it is nearest, no flags
-                out_key[i] = vessel_key(m, st.traj[self._nearest(st, xy[i])].sub)
+                out_key[i] = vessel_key(m, st.traj[self._nearest(st, p)].sub)
                 continue
             st.latest_t = t
-            lab, moved = follow_report(st.follow, t, xy[i], v[i], self.cfg)
+            lab, moved = follow_report(st.follow, t, p, (vs[i][0], vs[i][1]), self.cfg)
             if lab == len(st.traj):
                 st.traj.append(_Trajectory())
             tr = st.traj[lab]
@@ -157,7 +169,7 @@ class LiveIdentities:
             if tr.sub >= 0:
                 out_key[i] = self._track(m, st, lab, t, moved)
                 continue
-            tr.held_rows.append(row)
+            tr.held_rows.append(tuple(row))
             tr.moved.append(moved)
             out_key[i] = self._show_jump(m, st)
         if self.routed is not None:
@@ -178,19 +190,23 @@ class LiveIdentities:
         if self.origin is not None:
             enu = geodetic_to_enu(lat, lon, 0.0, *self.origin)
             return np.asarray(enu[..., :2]).reshape(-1, 2)
-        out = np.empty((mmsi.size, 2))
-        for i, m in enumerate(mmsi.tolist()):
-            st = self.mmsis.setdefault(m, _Mmsi())
+        origin = np.empty((mmsi.size, 2))
+        for i, (m, la, lo) in enumerate(zip(mmsi.tolist(), lat.tolist(), lon.tolist(),
+                                            strict=True)):  # fmt: skip
+            st = self.mmsis.get(m)
+            if st is None:
+                st = self.mmsis[m] = _Mmsi()
             if st.origin is None:
-                st.origin = (float(lat[i]), float(lon[i]))
-            out[i] = np.asarray(geodetic_to_enu(lat[i], lon[i], 0.0, *st.origin))[:2]
-        return out
+                st.origin = (la, lo)
+            origin[i] = st.origin
+        enu = geodetic_to_enu(lat, lon, 0.0, origin[:, 0], origin[:, 1])
+        return np.asarray(enu[..., :2]).reshape(-1, 2)
 
-    def _nearest(self, st: _Mmsi, xy: FloatArray) -> int:
+    def _nearest(self, st: _Mmsi, xy: tuple[float, float]) -> int:
         """The vessel trajectory whose last report is nearest ``xy`` (out-of-order use)."""
         f = st.follow
         cand = [j for j, tr in enumerate(st.traj) if tr.sub >= 0]
-        return min(cand, key=lambda j: float(np.hypot(*(xy - f.xy[j]))))
+        return min(cand, key=lambda j: math.dist(xy, f.xy[j]))
 
     def _track(self, m: int, st: _Mmsi, lab: int, t: float, moved: bool) -> int:
         """Flag a report of a vessel trajectory; its vessel key."""
@@ -199,16 +215,16 @@ class LiveIdentities:
             o is not tr and o.sub >= 0 and o.first_t < tr.last_t and tr.first_t < o.last_t
             for o in st.traj
         )
-        prev = tr.times[-1] if tr.times else None
-        tr.times.append(t)
-        if len(tr.times) > HISTORY:
-            del tr.times[0]
         gap = False
-        if prev is not None:
-            ts = np.array(tr.times)
-            limit = gap_limits(np.zeros(ts.size, np.int64), ts, 1, self.gap_factor,
-                               self.min_gap)[0]  # fmt: skip
-            gap = bool(t - prev > limit)
+        if tr.prev_t == tr.prev_t:  # not NaN: an interval
+            dt = t - tr.prev_t
+            tr.intervals.append(dt)
+            bisect.insort(tr.sorted_intervals, dt)
+            if len(tr.intervals) > HISTORY - 1:
+                old = tr.intervals.popleft()
+                del tr.sorted_intervals[bisect.bisect_left(tr.sorted_intervals, old)]
+            gap = dt > tr.limit(self.gap_factor, self.min_gap)
+        tr.prev_t = t
         jump = moved and not conflict
         key = vessel_key(m, tr.sub)
         self._flag(key, Flags(gap, jump, conflict))
@@ -218,8 +234,11 @@ class LiveIdentities:
         return key
 
     def _flag(self, key: int, f: Flags) -> None:
-        for name in self.counts:
-            self.counts[name] += int(getattr(f, name))
+        if f.gap or f.jump or f.identity_conflict:
+            c = self.counts
+            c["gap"] += f.gap
+            c["jump"] += f.jump
+            c["identity_conflict"] += f.identity_conflict
         if self.flags.get(key) != f:
             self.flags[key] = f
             self.changed.add(key)
@@ -236,12 +255,13 @@ class LiveIdentities:
     def resume(self, keys: list[int], t: FloatArray, lat: FloatArray, lon: FloatArray,
                sog_kn: FloatArray, cog_deg: FloatArray) -> None:  # fmt: skip
         """Start from vessels restored from a store: each key's trajectory continues from
-        its last estimate (time s, position deg, speed kn, course deg); report times and
-        held reports before the restart are not known."""
+        its last estimate (time s, position deg, speed kn, course deg); the reporting
+        intervals and held reports before the restart are not known."""
         rows = np.stack([t, lat, lon, sog_kn, cog_deg], -1).reshape(-1, 5)
         mm = np.array([split_key(k)[0] for k in keys], np.int64)
-        xy = self._plane(mm, rows[:, 1], rows[:, 2])
-        v = velocity_from_course(np.radians(rows[:, 4]), rows[:, 3] * KNOT_MPS).reshape(-1, 2)
+        xy = [(a, b) for a, b in self._plane(mm, rows[:, 1], rows[:, 2]).tolist()]
+        v = [(a, b) for a, b in velocity_from_course(
+            np.radians(rows[:, 4]), rows[:, 3] * KNOT_MPS).reshape(-1, 2).tolist()]  # fmt: skip
         for i, key in enumerate(keys):
             m, sub = split_key(key)
             st = self.mmsis.setdefault(m, _Mmsi())
@@ -249,7 +269,7 @@ class LiveIdentities:
             f.t.append(float(t[i]))
             f.xy.append(xy[i])
             f.v.append(v[i])
-            st.traj.append(_Trajectory(sub, float(t[i]), float(t[i])))
+            st.traj.append(_Trajectory(sub, float(t[i]), float(t[i]), prev_t=float(t[i])))
             st.vessels = max(st.vessels, sub + 1)
             st.latest_t = max(st.latest_t, float(t[i]))
             if st.last_vessel < 0 or t[i] >= st.traj[st.last_vessel].last_t:

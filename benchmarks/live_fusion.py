@@ -154,7 +154,8 @@ def main() -> None:
     args = ap.parse_args()
     print(f"load average before: {os.getloadavg()[0]:.2f} on {os.cpu_count()} cores")
     per_scan(args.vessels, args.scans)
-    loop_lag(args.lag_vessels, args.lag_scans, args.lag_period)
+    if args.lag_vessels > 0:  # 0: the time per scan only
+        loop_lag(args.lag_vessels, args.lag_scans, args.lag_period)
     print(f"load average after: {os.getloadavg()[0]:.2f}")
 
 

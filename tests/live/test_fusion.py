@@ -241,3 +241,25 @@ def test_median_gap_limits_equal_the_batch_gap_limits() -> None:
     flat = np.array([t for ts in times for t in ts])
     want = gap_limits(owner, flat, len(times), 2.5, 30.0)
     np.testing.assert_array_equal(median_gap_limits(times, 2.5, 30.0), want)
+
+
+def test_a_failing_fusion_step_is_counted_and_the_worker_goes_on() -> None:
+    setup, cfg = parse_fusion_config(
+        {"lat_deg": 56.0, "lon_deg": 7.0, "fusion": {"land_mask": False}}
+    )
+    fusion = LiveFusion(setup, cfg, queue_size=4)
+    step, calls = fusion._step, []
+
+    def flaky(item):
+        calls.append(item.t)
+        if len(calls) == 1:
+            raise RuntimeError("boom")
+        step(item)
+
+    fusion._step = flaky
+    fusion.start()
+    for k in range(3):
+        fusion.scan(1.7e9 + k, np.zeros(0, np.int64), None, {})
+    assert fusion.wait_idle(10.0)
+    fusion.close()
+    assert fusion.errors == {"RuntimeError": 1} and fusion.version == 2 and len(calls) == 3

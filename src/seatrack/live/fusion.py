@@ -272,8 +272,8 @@ class LiveFusion:
             self._steps.append(self.last_step_s)
             self.latency.add(self.last_step_s)
         except Exception as exc:  # a failing step never stops the worker or the radar
-            name = type(exc).__name__
-            self.errors[name] = self.errors.get(name, 0) + 1
+            name = type(exc).__name__  # a new dict: the event loop may be reading it
+            self.errors = {**self.errors, name: self.errors.get(name, 0) + 1}
         finally:
             numba.set_num_threads(threads)
             with self._cond:

@@ -9,7 +9,9 @@ from seatrack.fusion import scenario as sc
 from seatrack.fusion.anomalies import gap_limits
 from seatrack.fusion.anomalies import reporting_gaps
 from seatrack.fusion.anomalies import split_identities
+from seatrack.fusion.associate import FusionConfig
 from seatrack.fusion.coverage import Coverage
+from seatrack.fusion.picture import prepare_ais
 from seatrack.io.radar import parse_radar_config
 from seatrack.live.identity import LiveIdentities
 from seatrack.live.identity import split_key
@@ -36,13 +38,18 @@ def scene():
 
 
 def batch_flags(rep):
-    """``prepare_ais``'s split and flags (without the filter's outliers)."""
+    """``seatrack fuse``'s split and flags (``prepare_ais``); its ``jump`` without the
+    reports its AIS filter rejects (they are the live filter's ``status``)."""
     cov = Coverage.of(parse_radar_config({"lat_deg": 56.0, "lon_deg": 7.0}).site, land=False)
     xy = cov.to_local(rep.lat, rep.lon)
     s = split_identities(rep.mmsi, rep.t, xy, rep.sog_kn, rep.cog_deg)
     use = s.vessel >= 0
     limit = gap_limits(s.vessel[use], rep.t[use], s.vessel_mmsi.size, 2.5, 30.0)
     gap = reporting_gaps(np.where(use, s.vessel, -1), rep.t, limit)
+    side = prepare_ais(rep, cov, FusionConfig())  # the fuse path: the same split and flags
+    assert side.rows.size == len(rep) and np.array_equal(side.vessel, s.vessel)
+    assert np.array_equal(side.gap, gap) and np.array_equal(side.conflict, s.conflict)
+    assert not (s.jump & ~side.jump).any()
     return np.where(use, s.sub, -1), gap, s.jump, s.conflict
 
 

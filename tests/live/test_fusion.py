@@ -157,7 +157,7 @@ def test_a_vessel_rerun_replaces_its_later_states():
     fusion.add_estimates(ais.emitted)
     fusion.scan(t0 - 1, none, None, {})
     assert sorted(fusion.rows[0]) == [t0 + 10 * k for k in range(5)]
-    assert fusion.times[0] == [t0 + 10 * k for k in range(5)]
+    assert list(fusion.recent[0].times) == [t0 + 10 * k for k in range(5)]
     assert all(fusion.rows[0][t] == before[t] for t in (t0, t0 + 10, t0 + 20))
     assert fusion.rows[0][t0 + 40] != before[t0 + 40]  # re-run with the report at 30 s
     fusion.scan(t0 + 35, none, None, {})
@@ -228,19 +228,7 @@ def test_a_full_queue_drops_the_oldest_scan_and_keeps_its_ais_states() -> None:
     assert fusion.wait_idle(10.0)
     fusion.close()
     assert seen == [t0 + 1, t0 + 31] and fusion.version == 2 and not fusion.errors
-    assert fusion.times[0] == [t0 + 10 * k for k in range(4)]  # the dropped scans' states
-
-
-def test_median_gap_limits_equal_the_batch_gap_limits() -> None:
-    from seatrack.fusion.anomalies import gap_limits
-    from seatrack.live.fusion import median_gap_limits
-
-    rng = np.random.default_rng(3)
-    times = [np.cumsum(rng.uniform(1.0, 30.0, n)).tolist() for n in (0, 1, 2, 5, 8, 64)]
-    owner = np.repeat(np.arange(len(times)), [len(ts) for ts in times])
-    flat = np.array([t for ts in times for t in ts])
-    want = gap_limits(owner, flat, len(times), 2.5, 30.0)
-    np.testing.assert_array_equal(median_gap_limits(times, 2.5, 30.0), want)
+    assert list(fusion.recent[0].times) == [t0 + 10 * k for k in range(4)]  # dropped scans'
 
 
 def test_a_failing_fusion_step_is_counted_and_the_worker_goes_on() -> None:

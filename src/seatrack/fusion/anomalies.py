@@ -25,7 +25,9 @@ Positions are metres in one East-North plane (the radar's); times seconds.
 
 from __future__ import annotations
 
+import bisect
 import math
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -45,6 +47,7 @@ __all__ = [
     "split_identities",
     "reporting_gaps",
     "gap_limits",
+    "RecentIntervals",
 ]
 
 
@@ -229,6 +232,44 @@ def gap_limits(
                      + dt[np.minimum((first + last) // 2, dt.size - 1)])  # fmt: skip
         out[has] = np.maximum(gap_factor * med[has], min_gap_s)
     return out
+
+
+class RecentIntervals:
+    """The last ``size`` report times of one vessel (increasing) and the intervals between
+    them kept sorted, so that :meth:`limit` is :func:`gap_limits` of those times (the same
+    numbers) in constant time: for a live process, report by report."""
+
+    def __init__(self, size: int = 64) -> None:
+        self.size = size
+        self.times: deque[float] = deque()
+        self._sorted: list[float] = []
+
+    def push(self, t: float) -> None:
+        """Add a report time (not before the last one)."""
+        if self.times:
+            bisect.insort(self._sorted, t - self.times[-1])
+        self.times.append(t)
+        if len(self.times) > self.size:
+            first = self.times.popleft()
+            self._remove(self.times[0] - first)
+
+    def rewind(self, t: float) -> None:
+        """Forget the times after ``t`` (a vessel re-run from an earlier report)."""
+        while self.times and self.times[-1] > t:
+            last = self.times.pop()
+            if self.times:
+                self._remove(last - self.times[-1])
+
+    def limit(self, gap_factor: float, min_gap_s: float) -> float:
+        """``max(gap_factor * median interval, min_gap_s)``; ``min_gap_s`` with fewer
+        than two times (:func:`gap_limits`)."""
+        d, m = self._sorted, len(self._sorted)
+        if m == 0:
+            return min_gap_s
+        return max(gap_factor * (0.5 * (d[(m - 1) // 2] + d[m // 2])), min_gap_s)
+
+    def _remove(self, dt: float) -> None:
+        del self._sorted[bisect.bisect_left(self._sorted, dt)]
 
 
 def reporting_gaps(vessel: IntArray, t: FloatArray, limit: FloatArray) -> NDArray[np.bool_]:

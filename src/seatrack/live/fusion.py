@@ -40,6 +40,7 @@ from numpy.typing import NDArray
 from seatrack.filters.ais import TrackStates
 from seatrack.filters.ais.tracks import ReportPlanes
 from seatrack.filters.ais.tracks import tracks_from_states
+from seatrack.fusion.anomalies import RecentIntervals
 from seatrack.fusion.associate import AisStates
 from seatrack.fusion.associate import FusionConfig
 from seatrack.fusion.coverage import Coverage
@@ -52,7 +53,7 @@ from seatrack.live.counters import Latency
 
 FloatArray = NDArray[np.float64]
 
-__all__ = ["LiveFusion", "FusedTrack", "HISTORY", "median_gap_limits"]
+__all__ = ["LiveFusion", "FusedTrack", "HISTORY"]
 
 #: report times and states kept per vessel (its gap limit; the states until a scan)
 HISTORY = 64
@@ -79,28 +80,6 @@ class _Scan(NamedTuple):
     pos: FloatArray
     std_x: FloatArray
     std_y: FloatArray
-
-
-def median_gap_limits(times: list[list[float]], gap_factor: float, min_gap_s: float) -> FloatArray:
-    """:func:`~seatrack.fusion.anomalies.gap_limits` of per-vessel increasing report
-    times (s): ``max(gap_factor * median interval, min_gap_s)``, ``min_gap_s`` with fewer
-    than two reports; vectorised over a NaN-padded table."""
-    k = len(times)
-    width = max((len(ts) for ts in times), default=0)
-    out = np.full(k, min_gap_s)
-    if width < 2:
-        return out
-    tab = np.full((k, width), np.nan)
-    for i, ts in enumerate(times):
-        tab[i, : len(ts)] = ts
-    dt = np.sort(np.diff(tab, axis=1), axis=1)  # NaN last
-    m = np.array([len(ts) - 1 for ts in times])
-    has = m > 0
-    rows = np.flatnonzero(has)
-    lo, hi = (m[has] - 1) // 2, m[has] // 2
-    med = 0.5 * (dt[rows, lo] + dt[rows, hi])
-    out[has] = np.maximum(gap_factor * med, min_gap_s)
-    return out
 
 
 #: rows converted between tuples and arrays per NumPy call: each call holds the GIL, and
@@ -156,7 +135,7 @@ class LiveFusion:
         self.index: dict[int, int] = {}  # vessel key -> vessel id of the fusion
         self.mmsi: list[int] = []  # vessel id -> key (the MMSI)
         self.rows: list[dict[float, tuple[float, ...]]] = []  # per vessel: time -> state
-        self.times: list[list[float]] = []  # per vessel: report times (for the gap limit)
+        self.recent: list[RecentIntervals] = []  # per vessel: report times, gap limit
         self.limit: list[float] = []  # per vessel: gap limit (s)
         self._stale: set[int] = set()  # vessels whose gap limit needs recomputing
         self._raw: dict[tuple[int, float], None] = {}  # (vessel, time) of raw states
@@ -291,18 +270,15 @@ class LiveFusion:
                 j = self.index[key] = len(self.mmsi)
                 self.mmsi.append(key)
                 self.rows.append({})
-                self.times.append([])
+                self.recent.append(RecentIntervals(HISTORY))
                 self.limit.append(self.config.min_gap)
-            rows, times = self.rows[j], self.times[j]
-            if times and times[-1] > tk:  # the first report of a re-run: drop later states
+            rows, rec = self.rows[j], self.recent[j]
+            if rec.times and rec.times[-1] > tk:  # a re-run's first report: drop later ones
                 for old in [s for s in rows if s > tk]:
                     del rows[old]
-                while times and times[-1] > tk:
-                    times.pop()
+                rec.rewind(tk)
             self._stale.add(j)
-            times.append(tk)
-            if len(times) > HISTORY:
-                del times[0]
+            rec.push(tk)
             if kind == 0:
                 rows[tk] = raw
                 self._raw[j, tk] = None
@@ -312,13 +288,10 @@ class LiveFusion:
     def _limits(self) -> FloatArray:
         """Per vessel the longest silence before it is no longer predicted (s), of its
         report times seen (recomputed for the vessels with new reports)."""
-        if self._stale:
-            js = sorted(self._stale)
-            new = median_gap_limits([self.times[j] for j in js], self.config.gap_factor,
-                                    self.config.min_gap)  # fmt: skip
-            for j, lim in zip(js, new.tolist(), strict=True):
-                self.limit[j] = lim
-            self._stale.clear()
+        cfg = self.config
+        for j in self._stale:
+            self.limit[j] = self.recent[j].limit(cfg.gap_factor, cfg.min_gap)
+        self._stale.clear()
         return np.array(self.limit, dtype=float)
 
     def _convert(self) -> None:

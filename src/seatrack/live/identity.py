@@ -29,9 +29,7 @@ when its trajectory becomes a vessel), from what is known then:
 
 from __future__ import annotations
 
-import bisect
 import math
-from collections import deque
 from dataclasses import dataclass
 from dataclasses import field
 from typing import Any
@@ -40,6 +38,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.fusion.anomalies import RecentIntervals
 from seatrack.fusion.anomalies import SplitConfig
 from seatrack.fusion.anomalies import Trajectories
 from seatrack.fusion.anomalies import follow_report
@@ -82,16 +81,7 @@ class _Trajectory:
     last_t: float = -math.inf
     moved: list[bool] = field(default_factory=list)  # per held report
     held_rows: list[tuple[float, ...]] = field(default_factory=list)  # held reports
-    prev_t: float = math.nan  # time of the vessel's last tracked report
-    intervals: deque[float] = field(default_factory=deque)  # the last HISTORY - 1
-    sorted_intervals: list[float] = field(default_factory=list)  # the same, sorted
-
-    def limit(self, gap_factor: float, min_gap_s: float) -> float:
-        """:func:`~seatrack.fusion.anomalies.gap_limits` of the intervals kept (s)."""
-        d, m = self.sorted_intervals, len(self.sorted_intervals)
-        if m == 0:
-            return min_gap_s
-        return max(gap_factor * (0.5 * (d[(m - 1) // 2] + d[m // 2])), min_gap_s)
+    recent: RecentIntervals = field(default_factory=lambda: RecentIntervals(HISTORY))
 
 
 @dataclass
@@ -215,16 +205,10 @@ class LiveIdentities:
             o is not tr and o.sub >= 0 and o.first_t < tr.last_t and tr.first_t < o.last_t
             for o in st.traj
         )
-        gap = False
-        if tr.prev_t == tr.prev_t:  # not NaN: an interval
-            dt = t - tr.prev_t
-            tr.intervals.append(dt)
-            bisect.insort(tr.sorted_intervals, dt)
-            if len(tr.intervals) > HISTORY - 1:
-                old = tr.intervals.popleft()
-                del tr.sorted_intervals[bisect.bisect_left(tr.sorted_intervals, old)]
-            gap = dt > tr.limit(self.gap_factor, self.min_gap)
-        tr.prev_t = t
+        rec = tr.recent
+        prev = rec.times[-1] if rec.times else None
+        rec.push(t)
+        gap = prev is not None and t - prev > rec.limit(self.gap_factor, self.min_gap)
         jump = moved and not conflict
         key = vessel_key(m, tr.sub)
         self._flag(key, Flags(gap, jump, conflict))
@@ -269,7 +253,9 @@ class LiveIdentities:
             f.t.append(float(t[i]))
             f.xy.append(xy[i])
             f.v.append(v[i])
-            st.traj.append(_Trajectory(sub, float(t[i]), float(t[i]), prev_t=float(t[i])))
+            tr = _Trajectory(sub, float(t[i]), float(t[i]))
+            tr.recent.push(float(t[i]))
+            st.traj.append(tr)
             st.vessels = max(st.vessels, sub + 1)
             st.latest_t = max(st.latest_t, float(t[i]))
             if st.last_vessel < 0 or t[i] >= st.traj[st.last_vessel].last_t:

@@ -54,7 +54,10 @@ def scene(tmp_path_factory):
     datagrams = [("\n".join([header, *rs]) + "\n").encode() for rs in scans.values()]
 
     async def go():
-        proc = await started(LiveOptions(ais=[UDP], plots=[UDP], radar=setup, fusion=cfg))
+        opts = LiveOptions(
+            ais=[UDP], plots=[UDP], radar=setup, fusion=cfg, fusion_queue=len(datagrams)
+        )  # every scan fused: none dropped
+        proc = await started(opts)
         runner = await start_web(proc, "127.0.0.1", 0)
         url = f"http://127.0.0.1:{proc.http_port}"
         ais_port, plot_port = proc.udp_ports
@@ -95,9 +98,13 @@ def test_live_fusion_classes_ais_and_dark_vessels(scene):
     assert len(by_class["dark"]) == 1 and by_class["dark"][0]["mmsi"] is None
     assert by_class["dark"][0]["identity_prob"] is None
     assert all(p["not_seen"] is False for p in ais)
+    assert all(p["sub"] == 0 and not (p["gap"] or p["jump"] or p["identity_conflict"])
+               for p in ais)  # fmt: skip
     h = scene["health"]
     assert h["dark"] == 1 and h["not_seen"] == 0 and h["radar_tracks"] == len(radar)
     assert h["fusion_ms"]["p99"] is not None
+    assert h["fusion_scans"] == scene["scans"] and h["fusion_scans_dropped"] == 0
+    assert h["fusion_waiting"] == 0 and "fusion_errors" not in h
 
 
 def test_live_fusion_equals_batch_fuse_at_the_last_scan(scene):
@@ -139,18 +146,21 @@ def test_a_vessel_rerun_replaces_its_later_states():
     for k in (0, 1, 2, 4):
         ais.add(np.array([219000001]), np.array([t0 + 10 * k]), np.array([lat]),
                 np.array([lon + k * step]), np.array([5.0]), np.array([90.0]))  # fmt: skip
+    none = np.zeros(0, np.int64)
     fusion.add_estimates(ais.emitted)
+    fusion.scan(t0 - 1, none, None, {})  # folds the states in, keeps them all
     before = dict(fusion.rows[0])
     ais.emitted.clear()
     ais.add(np.array([219000001]), np.array([t0 + 30]), np.array([lat]),
             np.array([lon + 3 * step]), np.array([5.0]), np.array([90.0]))  # fmt: skip
     assert [e.t for _, e in ais.emitted] == [t0 + 30, t0 + 40]  # the re-run
     fusion.add_estimates(ais.emitted)
+    fusion.scan(t0 - 1, none, None, {})
     assert sorted(fusion.rows[0]) == [t0 + 10 * k for k in range(5)]
-    assert fusion.times[0] == [t0 + 10 * k for k in range(5)]
+    assert list(fusion.recent[0].times) == [t0 + 10 * k for k in range(5)]
     assert all(fusion.rows[0][t] == before[t] for t in (t0, t0 + 10, t0 + 20))
     assert fusion.rows[0][t0 + 40] != before[t0 + 40]  # re-run with the report at 30 s
-    fusion.scan(t0 + 35, np.zeros(0, np.int64), None, {})
+    fusion.scan(t0 + 35, none, None, {})
     assert sorted(fusion.rows[0]) == [t0 + 30, t0 + 40]  # older states are not needed
 
 
@@ -177,3 +187,67 @@ def test_a_failing_scan_consumer_is_counted_and_the_radar_goes_on() -> None:
         radar.flush()
     assert radar.listener_errors == {"RuntimeError": 3}
     assert len(calls) == 3 and radar.counters.scans == 3
+
+
+def test_a_full_queue_drops_the_oldest_scan_and_keeps_its_ais_states() -> None:
+    """The worker busy with one scan, three more arrive with a queue of one: the two
+    older are dropped (counted), the newest is fused with every AIS state recorded."""
+    import threading
+
+    setup, cfg = parse_fusion_config(
+        {"lat_deg": 56.0, "lon_deg": 7.0, "fusion": {"land_mask": False}}
+    )
+    fusion = LiveFusion(setup, cfg, queue_size=1)
+    ais = LiveAis()
+    ais.emitted = []
+    release, entered = threading.Event(), threading.Event()
+    step = fusion._step
+    seen: list[float] = []
+
+    def held(item):  # the first scan waits until released
+        seen.append(item.t)
+        if len(seen) == 1:
+            entered.set()
+            release.wait(10.0)
+        step(item)
+
+    fusion._step = held
+    fusion.start()
+    t0, none = 1.7e9, np.zeros(0, np.int64)
+    mmsi = np.array([219000001])
+    for k in range(4):
+        ais.add(mmsi, np.array([t0 + 10 * k]), np.array([56.0]), np.array([7.0 + 1e-3 * k]),
+                np.array([5.0]), np.array([90.0]))  # fmt: skip
+        fusion.add_estimates(ais.emitted)
+        ais.emitted.clear()
+        fusion.scan(t0 + 10 * k + 1, none, None, {})
+        if k == 0:
+            assert entered.wait(10.0)
+    assert fusion.dropped == 2 and fusion.waiting == 1
+    release.set()
+    assert fusion.wait_idle(10.0)
+    fusion.close()
+    assert seen == [t0 + 1, t0 + 31] and fusion.version == 2 and not fusion.errors
+    assert list(fusion.recent[0].times) == [t0 + 10 * k for k in range(4)]  # dropped scans'
+
+
+def test_a_failing_fusion_step_is_counted_and_the_worker_goes_on() -> None:
+    setup, cfg = parse_fusion_config(
+        {"lat_deg": 56.0, "lon_deg": 7.0, "fusion": {"land_mask": False}}
+    )
+    fusion = LiveFusion(setup, cfg, queue_size=4)
+    step, calls = fusion._step, []
+
+    def flaky(item):
+        calls.append(item.t)
+        if len(calls) == 1:
+            raise RuntimeError("boom")
+        step(item)
+
+    fusion._step = flaky
+    fusion.start()
+    for k in range(3):
+        fusion.scan(1.7e9 + k, np.zeros(0, np.int64), None, {})
+    assert fusion.wait_idle(10.0)
+    fusion.close()
+    assert fusion.errors == {"RuntimeError": 1} and fusion.version == 2 and len(calls) == 3

@@ -144,7 +144,9 @@ def test_late_report_is_counted_late():
 
 def test_udp_picture_equals_batch_causal_tracker(tmp_path):
     """The same messages in the same order: the live picture equals the batch tracker's
-    causal output (``track_reports`` with ``causal_config``) on the file of those lines."""
+    causal output (``track_reports`` with ``causal_config``) on the file of those lines,
+    each report tracked under the vessel the live MMSI split gave it (the stream has
+    3 km jumps: a jump that lasts is a second vessel on the MMSI)."""
     r = synthetic(seed=5, vessels=8, reports=40)
     lines = []
     for k in range(len(r)):
@@ -152,14 +154,10 @@ def test_udp_picture_equals_batch_causal_tracker(tmp_path):
     path = tmp_path / "ais.nmea"
     path.write_bytes(b"\n".join(lines) + b"\n")
     rep = read_ais([path])
-    tr = track_reports(rep, causal_config())
-    want = {}
-    for k in range(len(rep)):
-        if np.isfinite(tr.lat[k]):
-            want[int(rep.mmsi[k])] = (tr.lat[k], tr.lon[k], tr.speed[k], tr.course[k])
 
     async def go():
         proc = await started(LiveOptions(ais=[UDP]))
+        proc.identities.record()  # the vessel key of every report
         for k in range(0, len(lines), 20):
             udp_send(proc.udp_ports[0], [b"\n".join(lines[k : k + 20])])
             await asyncio.sleep(0.002)
@@ -170,6 +168,15 @@ def test_udp_picture_equals_batch_causal_tracker(tmp_path):
 
     proc = run(go())
     assert proc.counters.decoded == len(lines) and proc.counters.check()
+    key = {(m, t): k for m, t, k in proc.identities.routed}
+    rep.mmsi = np.array([key[m, t] for m, t in zip(rep.mmsi.tolist(), rep.t.tolist(),
+                                                   strict=True)], np.int64)  # fmt: skip
+    assert (rep.mmsi > 1e9).any()  # a split MMSI
+    tr = track_reports(rep, causal_config())
+    want = {}
+    for k in range(len(rep)):
+        if np.isfinite(tr.lat[k]):
+            want[int(rep.mmsi[k])] = (tr.lat[k], tr.lon[k], tr.speed[k], tr.course[k])
     ids, got, _ = proc.ais.tracks()
     assert sorted(ids) == sorted(want)
     for k, m in enumerate(ids):

@@ -25,6 +25,9 @@ Positions are metres in one East-North plane (the radar's); times seconds.
 
 from __future__ import annotations
 
+import bisect
+import math
+from collections import deque
 from dataclasses import dataclass
 
 import numpy as np
@@ -37,7 +40,16 @@ from seatrack.geometry import velocity_from_course
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-__all__ = ["SplitConfig", "Split", "split_identities", "reporting_gaps", "gap_limits"]
+__all__ = [
+    "SplitConfig",
+    "Split",
+    "Trajectories",
+    "follow_report",
+    "split_identities",
+    "reporting_gaps",
+    "gap_limits",
+    "RecentIntervals",
+]
 
 
 @dataclass(frozen=True)
@@ -73,47 +85,76 @@ class Split:
     vessel_sub: IntArray
 
 
+@dataclass
+class Trajectories:
+    """The trajectories of one MMSI followed so far: per trajectory its last report's
+    time ``t`` (s), position ``xy`` (m) and velocity ``v`` (m/s; NaN unknown)."""
+
+    t: list[float]
+    xy: list[tuple[float, float]]
+    v: list[tuple[float, float]]
+
+    @classmethod
+    def empty(cls) -> Trajectories:
+        return cls([], [], [])
+
+
+def follow_report(
+    tr: Trajectories, t: float, xy: tuple[float, float], v: tuple[float, float],
+    cfg: SplitConfig,
+) -> tuple[int, bool]:  # fmt: skip
+    """Trajectory label of the MMSI's next report (time order) at ``t``, ``xy``, ``v``,
+    and whether it started a new trajectory while another was alive or out of reach (an
+    implausible move); ``tr`` is updated (module docstring). Used report by report by
+    :func:`split_identities` and by a live process (plain floats: a few microseconds)."""
+    x, y = xy
+    best, best_err = -1, math.inf
+    for j, tj in enumerate(tr.t):
+        dt = t - tj
+        if dt > cfg.expiry:
+            continue
+        xj, yj = tr.xy[j]
+        if math.hypot(x - xj, y - yj) > cfg.max_speed * dt + cfg.slack:
+            continue
+        vx, vy = tr.v[j]
+        if not (math.isfinite(vx) and math.isfinite(vy)):
+            vx = vy = 0.0
+        err = math.hypot(x - xj - vx * dt, y - yj - vy * dt)
+        if err < best_err:
+            best, best_err = j, err
+    moved = False
+    if best < 0:
+        alive = [j for j, tj in enumerate(tr.t) if t - tj <= cfg.expiry]
+        latest = max(range(len(tr.t)), key=tr.t.__getitem__) if tr.t else -1
+        reach = False
+        if latest >= 0:
+            xl, yl = tr.xy[latest]
+            reach = math.hypot(x - xl, y - yl) <= cfg.max_speed * (t - tr.t[latest]) + cfg.slack
+        moved = bool(alive) or (latest >= 0 and not reach)
+        if not alive and reach:  # after a long silence, within reach: continued
+            best = latest
+        elif len(alive) >= cfg.max_trajectories:  # no room: the stalest one is replaced
+            best = min(alive, key=tr.t.__getitem__)
+        else:
+            best = len(tr.t)
+            tr.t.append(t)
+            tr.xy.append(xy)
+            tr.v.append(v)
+    tr.t[best], tr.xy[best], tr.v[best] = t, xy, v
+    return best, moved
+
+
 def _follow(
     t: FloatArray, xy: FloatArray, v: FloatArray, cfg: SplitConfig
 ) -> tuple[IntArray, NDArray[np.bool_]]:
     """Trajectory label of each report of one MMSI (time order), and whether the report
-    started a new trajectory while another was alive (an implausible move); see the
-    module docstring."""
+    started a new trajectory while another was alive (:func:`follow_report`)."""
     n = t.size
     label = np.empty(n, np.int64)
     moved = np.zeros(n, bool)
-    last: list[int] = []  # last report of each trajectory
-    for i in range(n):
-        best, best_err = -1, np.inf
-        for j, k in enumerate(last):
-            dt = t[i] - t[k]
-            if dt > cfg.expiry:
-                continue
-            step = float(np.hypot(*(xy[i] - xy[k])))
-            if step > cfg.max_speed * dt + cfg.slack:
-                continue
-            vk = v[k] if np.isfinite(v[k]).all() else np.zeros(2)
-            err = float(np.hypot(*(xy[i] - xy[k] - vk * dt)))
-            if err < best_err:
-                best, best_err = j, err
-        if best < 0:
-            alive = [j for j, k in enumerate(last) if t[i] - t[k] <= cfg.expiry]
-            latest = max(range(len(last)), key=lambda j: t[last[j]]) if last else -1
-            reach = (
-                latest >= 0
-                and float(np.hypot(*(xy[i] - xy[last[latest]])))
-                <= cfg.max_speed * (t[i] - t[last[latest]]) + cfg.slack
-            )
-            moved[i] = bool(alive) or (latest >= 0 and not reach)
-            if not alive and reach:  # after a long silence, within reach: continued
-                best = latest
-            elif len(alive) >= cfg.max_trajectories:  # no room: the stalest one is replaced
-                best = min(alive, key=lambda j: t[last[j]])
-            else:
-                best = len(last)
-                last.append(i)
-        last[best] = i
-        label[i] = best
+    tr = Trajectories.empty()
+    for i, (ti, p, u) in enumerate(zip(t.tolist(), xy.tolist(), v.tolist(), strict=True)):
+        label[i], moved[i] = follow_report(tr, ti, (p[0], p[1]), (u[0], u[1]), cfg)
     return label, moved
 
 
@@ -192,6 +233,44 @@ def gap_limits(
                      + dt[np.minimum((first + last) // 2, dt.size - 1)])  # fmt: skip
         out[has] = np.maximum(gap_factor * med[has], min_gap_s)
     return out
+
+
+class RecentIntervals:
+    """The last ``size`` report times of one vessel (increasing) and the intervals between
+    them kept sorted, so that :meth:`limit` is :func:`gap_limits` of those times (the same
+    numbers) in constant time: for a live process, report by report."""
+
+    def __init__(self, size: int = 64) -> None:
+        self.size = size
+        self.times: deque[float] = deque()
+        self._sorted: list[float] = []
+
+    def push(self, t: float) -> None:
+        """Add a report time (not before the last one)."""
+        if self.times:
+            bisect.insort(self._sorted, t - self.times[-1])
+        self.times.append(t)
+        if len(self.times) > self.size:
+            first = self.times.popleft()
+            self._remove(self.times[0] - first)
+
+    def rewind(self, t: float) -> None:
+        """Forget the times after ``t`` (a vessel re-run from an earlier report)."""
+        while self.times and self.times[-1] > t:
+            last = self.times.pop()
+            if self.times:
+                self._remove(last - self.times[-1])
+
+    def limit(self, gap_factor: float, min_gap_s: float) -> float:
+        """``max(gap_factor * median interval, min_gap_s)``; ``min_gap_s`` with fewer
+        than two times (:func:`gap_limits`)."""
+        d, m = self._sorted, len(self._sorted)
+        if m == 0:
+            return min_gap_s
+        return max(gap_factor * (0.5 * (d[(m - 1) // 2] + d[m // 2])), min_gap_s)
+
+    def _remove(self, dt: float) -> None:
+        del self._sorted[bisect.bisect_left(self._sorted, dt)]
 
 
 def reporting_gaps(vessel: IntArray, t: FloatArray, limit: FloatArray) -> NDArray[np.bool_]:

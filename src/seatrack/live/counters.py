@@ -61,6 +61,7 @@ class Counters:
         self.display_drops = 0
         self.reconnects = 0
         self.nmea_out_errors = 0
+        self.nmea_out_not_sent = 0  # track-scans beyond the 99 TTM target numbers
         self.latency = Latency()
         self.scan_latency = Latency(2_000)
 
@@ -93,4 +94,5 @@ class Counters:
             "display_drops": self.display_drops,
             "reconnects": self.reconnects,
             "nmea_out_errors": self.nmea_out_errors,
+            "nmea_out_not_sent": self.nmea_out_not_sent,
         }

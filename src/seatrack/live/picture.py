@@ -10,7 +10,12 @@ shown, ``[lon, lat]``, oldest first). Geometry: ``Point [lon, lat]``.
 With radar-AIS fusion (AIS and radar inputs, :mod:`seatrack.live.fusion`), radar features
 carry the fusion of the last scan: ``mmsi`` (the associated AIS vessel, null when none),
 ``identity_prob`` (null when none) and ``class`` (``ais`` | ``dark`` | ``unknown``); AIS
-features carry ``not_seen`` (bool). Without fusion these are null.
+features carry ``not_seen`` (bool). Without fusion these are null. Radar features also
+carry ``ais_id``, the feature id of their AIS vessel.
+
+AIS anomalies (:mod:`seatrack.live.identity`): AIS features carry ``sub`` (0 for an MMSI's
+first vessel; a shared MMSI's further vessels are ``ais:MMSI#2``, ``#3`` ...) and the
+flags of the vessel's last report, ``gap``, ``jump`` and ``identity_conflict``.
 """
 
 from __future__ import annotations
@@ -26,8 +31,9 @@ from typing import Any
 from seatrack.filters.ais import OUTLIER_KINDS
 from seatrack.geometry import KNOT_MPS
 from seatrack.geometry import bearing_rad_to_deg
+from seatrack.live.identity import split_key
 
-__all__ = ["Picture", "RadarTrackView", "time_utc"]
+__all__ = ["Picture", "RadarTrackView", "ais_id", "time_utc"]
 
 TRAIL = 20
 
@@ -35,6 +41,14 @@ TRAIL = 20
 def time_utc(t: float) -> str:
     """Unix time (s) -> ``YYYY-MM-DDTHH:MM:SS.mmmZ``."""
     return datetime.fromtimestamp(t, UTC).strftime("%Y-%m-%dT%H:%M:%S.%f")[:-3] + "Z"
+
+
+def ais_id(key: int) -> str:
+    """The feature id of an AIS vessel key: ``ais:MMSI`` for an MMSI's first vessel,
+    ``ais:MMSI#2``, ``#3`` ... for the further vessels a shared MMSI is split into (the
+    names of ``seatrack fuse``)."""
+    m, sub = split_key(key)
+    return f"ais:{m}" if sub == 0 else f"ais:{m}#{sub + 1}"
 
 
 def _num(x: float, digits: int) -> float | None:
@@ -86,13 +100,21 @@ class Picture:
         self.features[fid] = _feature(fid, lat, lon, props)
         self.dirty.add(fid)
 
-    def refresh_ais(self, ais: Any, names: dict[int, str]) -> None:
-        """Features of the vessels changed since the last call (``ais.changed``)."""
+    def refresh_ais(self, ais: Any, names: dict[int, str], identities: Any = None) -> None:
+        """Features of the vessels changed since the last call (``ais.changed``, and the
+        vessels whose anomaly flags changed in ``identities``,
+        :class:`~seatrack.live.identity.LiveIdentities`). Vessels are tracked under keys
+        (:func:`~seatrack.live.identity.vessel_key`: the MMSI, or the MMSI's second,
+        third ... vessel)."""
+        if identities is not None and identities.changed:
+            ais.changed.update(k for k in identities.changed if k in ais.vessels)
+            identities.changed.clear()
         if not ais.changed:
             return
         ids, tr, t = ais.tracks(sorted(ais.changed))
         ais.changed.clear()
-        for k, m in enumerate(ids):
+        for k, key in enumerate(ids):
+            m, _ = split_key(key)
             kind = int(tr.outlier_kind[k])
             props = {
                 "source": "ais",
@@ -103,27 +125,33 @@ class Picture:
                 "status": OUTLIER_KINDS.get(kind, "tracking"),
                 "std_m": _num(tr.std_pos_m[k], 2),
                 "name": names.get(m, ""),
-                "not_seen": (m in self.not_seen) if self.fused else None,
+                "not_seen": (key in self.not_seen) if self.fused else None,
             }
-            self._put(f"ais:{m}", tr.lat[k], tr.lon[k], props)
+            if identities is not None:
+                props.update(identities.describe(key))
+            self._put(ais_id(key), tr.lat[k], tr.lon[k], props)
 
     def set_radar(self, tracks: list[RadarTrackView]) -> None:
-        """Replace the radar tracks (after a scan)."""
+        """Replace the radar tracks (after a scan); a track keeps its fusion properties
+        until the fusion of the new scan arrives (:meth:`set_fusion`)."""
         keep = set()
         for r in tracks:
             fid = f"radar:{r.track_id}"
             keep.add(fid)
+            old = self.features.get(fid)
+            fused = old["properties"] if old is not None and self.fused else {}
             props = {
                 "source": "radar",
-                "mmsi": None,
+                "mmsi": fused.get("mmsi"),
                 "time_utc": time_utc(r.t),
                 "sog_kn": _num(r.speed / KNOT_MPS, 2),
                 "cog_deg": _num(bearing_rad_to_deg(r.course), 1),
                 "status": "confirmed" if r.confirmed else "tentative",
                 "std_m": _num(r.std_m, 2),
                 "name": "",
-                "identity_prob": None,
-                "class": None,
+                "identity_prob": fused.get("identity_prob"),
+                "ais_id": fused.get("ais_id"),
+                "class": fused.get("class"),
             }
             self._put(fid, r.lat, r.lon, props)
         for fid in [f for f in self.features if f.startswith("radar:") and f not in keep]:
@@ -140,14 +168,15 @@ class Picture:
             if feat is None:
                 continue
             p = feat["properties"]
-            p["mmsi"] = f.mmsi
+            p["mmsi"] = None if f.mmsi is None else split_key(f.mmsi)[0]
+            p["ais_id"] = None if f.mmsi is None else ais_id(f.mmsi)
             p["identity_prob"] = None if f.identity_prob is None else _num(f.identity_prob, 4)
             p["class"] = f.klass
             self.dirty.add(f"radar:{tid}")
         changed = self.not_seen ^ not_seen
         self.not_seen = set(not_seen)
         for m in changed:
-            feat = self.features.get(f"ais:{m}")
+            feat = self.features.get(ais_id(m))
             if feat is not None:
                 feat["properties"]["not_seen"] = m in not_seen
                 self.dirty.add(f"ais:{m}")

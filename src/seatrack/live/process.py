@@ -9,14 +9,17 @@ together with the picture (:mod:`seatrack.live.counters`). Radar chunks go to
 :class:`~seatrack.live.radar.LiveRadar` when a radar is configured. A ticker closes timed
 out scans and fragments, refreshes the picture and feeds the web clients, the NMEA output
 and the store once a second or faster.
-With AIS and radar inputs, every closed scan runs one radar-AIS fusion step
-(:class:`~seatrack.live.fusion.LiveFusion`) on the AIS states emitted so far.
+With AIS and radar inputs, every closed scan is handed to the radar-AIS fusion
+(:class:`~seatrack.live.fusion.LiveFusion`) with the AIS states emitted so far; it runs in
+a worker thread fed by a bounded queue of scans (the newest wins, drops counted), and the
+picture takes its result at the next refresh.
 """
 
 from __future__ import annotations
 
 import asyncio
 import contextlib
+import math
 import time
 from dataclasses import dataclass
 from dataclasses import field
@@ -25,6 +28,7 @@ from typing import Any
 
 import numpy as np
 
+from seatrack.geometry import KNOT_MPS
 from seatrack.io.ais.reports import TIME_MAX
 from seatrack.io.ais.reports import TIME_MIN
 from seatrack.live.ais import LiveAis
@@ -59,6 +63,7 @@ class LiveOptions:
     commit_s: float = 0.5
     ais_config: Any = None
     fusion: Any = None  # FusionConfig of radar.toml's [fusion] table (default: defaults)
+    fusion_queue: int = 1  # scans waiting for the fusion worker at most
 
 
 class LiveProcess:
@@ -70,6 +75,7 @@ class LiveProcess:
         self.assembler = Assembler()
         self.duplicates = Duplicates(opts.window_s)
         self.ais = LiveAis(opts.ais_config, opts.window_s)
+        self.identities = _identities(opts)  # shared MMSIs split, AIS anomalies flagged
         self.names: dict[int, str] = {}
         self.picture = Picture()
         self.queue: asyncio.Queue[Chunk] = asyncio.Queue(opts.queue_size)
@@ -89,10 +95,11 @@ class LiveProcess:
             self._open_store(opts.store)
         self.fusion: Any = None
         self._fusion_emitted = False  # the fusion, not the store, empties ais.emitted
+        self._fusion_seen = 0  # the fusion's result version shown in the picture
         if opts.ais and self.radar is not None:
             from seatrack.live.fusion import LiveFusion
 
-            self.fusion = LiveFusion(opts.radar, opts.fusion)
+            self.fusion = LiveFusion(opts.radar, opts.fusion, opts.fusion_queue)
             self.radar.listeners.append(self.fusion.scan)
             self.picture.fused = True
             if self.ais.emitted is None:
@@ -118,6 +125,10 @@ class LiveProcess:
         self.writer = StoreWriter(self.store)
         self.ais.emitted = []
         self.restored = self.writer.restore(self.ais, self.radar, self.counters)
+        if self.ais.vessels:  # each MMSI's split goes on from its restored vessels
+            keys, tr, t = self.ais.tracks()
+            self.identities.resume(keys, t, tr.lat, tr.lon, tr.speed / KNOT_MPS,
+                                   np.degrees(tr.course))  # fmt: skip
         self.restore_s = time.perf_counter() - t0
         self.names.update({m: v.name for m, v in self.ais.vessels.items() if v.name})
         if self.radar is not None:
@@ -194,11 +205,9 @@ class LiveProcess:
             return
         emitted = self.ais.emitted if self.fusion is not None else None
         n0 = 0 if emitted is None else len(emitted)
-        rows = np.array([(d.lat, d.lon, d.sog_kn, d.cog_deg, m.time_s) for d, m in pos])
-        used = self.ais.add(
-            np.array([d.mmsi for d, _ in pos], dtype=np.int64), rows[:, 4], rows[:, 0],
-            rows[:, 1], rows[:, 2], rows[:, 3],
-        )  # fmt: skip
+        rows = np.array([(m.time_s, d.lat, d.lon, d.sog_kn, d.cog_deg) for d, m in pos])
+        keys = self.identities.route(np.array([d.mmsi for d, _ in pos], np.int64), rows)
+        used = self.ais.add(keys, rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4])
         if self.fusion is not None and emitted is not None:  # every used report's state
             self.fusion.add_estimates(emitted[n0:])
             if self._fusion_emitted:
@@ -245,12 +254,13 @@ class LiveProcess:
 
     def refresh(self) -> None:
         """Update the picture from the trackers and hand the changes to the listeners."""
-        self.picture.refresh_ais(self.ais, self.names)
+        self.picture.refresh_ais(self.ais, self.names, self.identities)
         if self.radar is not None and self.radar.changed:
             self.picture.set_radar(self.radar.current)
             self.radar.changed = False
-            if self.fusion is not None:
-                self.picture.set_fusion(self.fusion.tracks, self.fusion.not_seen)
+        if self.fusion is not None and self.fusion.version != self._fusion_seen:
+            self._fusion_seen = self.fusion.version
+            self.picture.set_fusion(self.fusion.tracks, self.fusion.not_seen)
         changes = self.picture.take_changes()
         if changes is not None:
             for fn in self.listeners:
@@ -265,8 +275,14 @@ class LiveProcess:
             h["dark"] = self.fusion.n_dark
             h["not_seen"] = len(self.fusion.not_seen)
             h["fusion_ms"] = self.fusion.latency.percentiles_ms()
+            h["fusion_scans"] = self.fusion.version
+            h["fusion_scans_dropped"] = self.fusion.dropped
+            h["fusion_waiting"] = self.fusion.waiting
+            if self.fusion.errors:
+                h["fusion_errors"] = dict(self.fusion.errors)
         if self.radar is not None and self.radar.listener_errors:
             h["scan_consumer_errors"] = dict(self.radar.listener_errors)
+        h["ais_flags"] = dict(self.identities.counts)
         h["pending_fragments"] = self.assembler.pending
         h["queue"] = self.queue.qsize()
         if self.store is not None:
@@ -282,6 +298,8 @@ class LiveProcess:
         def reconnected() -> None:
             cnt.reconnects += 1
 
+        if self.fusion is not None:
+            self.fusion.start()
         self._tasks.append(asyncio.create_task(self.consume()))
         self._tasks.append(asyncio.create_task(self.tick()))
         if self.store is not None:
@@ -307,6 +325,8 @@ class LiveProcess:
         await self.queue.join()
         if self.radar is not None:
             self.radar.flush()
+        if self.fusion is not None:
+            await asyncio.to_thread(self.fusion.wait_idle)
         self.refresh()
 
     async def stop(self) -> None:
@@ -319,6 +339,8 @@ class LiveProcess:
             with contextlib.suppress(asyncio.CancelledError, Exception):
                 await t
         self._tasks.clear()
+        if self.fusion is not None:
+            await asyncio.to_thread(self.fusion.close)
         if self.nmea_out is not None:
             self.nmea_out.close()
         if self.store is not None:
@@ -329,3 +351,16 @@ class LiveProcess:
                 await self.commit()
             self.store.close()
             self.store = None
+
+
+def _identities(opts: LiveOptions) -> Any:
+    """The causal MMSI split of the process: in the radar's plane when there is one, the
+    gap keys of its ``[fusion]`` table."""
+    from seatrack.fusion.associate import FusionConfig
+    from seatrack.live.identity import LiveIdentities
+
+    cfg = opts.fusion or FusionConfig()
+    origin = None
+    if opts.radar is not None:
+        origin = (math.degrees(opts.radar.site.lat), math.degrees(opts.radar.site.lon))
+    return LiveIdentities(origin, cfg.gap_factor, cfg.min_gap)

@@ -27,7 +27,9 @@
     var rows = [["id", p.id], ["source", p.source], ["MMSI", p.mmsi], ["name", p.name],
       ["time (UTC)", p.time_utc], ["SOG (kn)", p.sog_kn], ["COG (deg)", p.cog_deg],
       ["status", p.status], ["sigma (m)", p.std_m], ["class", p["class"]],
-      ["identity prob.", p.identity_prob], ["not seen", p.not_seen ? "yes" : null]];
+      ["identity prob.", p.identity_prob], ["not seen", p.not_seen ? "yes" : null],
+      ["AIS vessel", p.ais_id], ["gap", p.gap ? "yes" : null], ["jump", p.jump ? "yes" : null],
+      ["identity conflict", p.identity_conflict ? "yes" : null]];
     return '<table class="popup">' + rows.filter(function (r) { return r[1] !== null && r[1] !== ""; })
       .map(function (r) { return "<tr><td>" + r[0] + "</td><td>" + String(r[1]) + "</td></tr>"; })
       .join("") + "</table>";

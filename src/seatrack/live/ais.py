@@ -139,10 +139,10 @@ class VesselFilter:
     per-report logic with ``smooth=False``, no withheld rows, no timestamp offsets and
     the report noise ``sigma_pos_m``; compiled: :func:`~seatrack.live.ais_step.causal_step`)."""
 
-    def __init__(self, par: KernelParams) -> None:
+    def __init__(self, par: KernelParams, state: FloatArray | None = None) -> None:
         self.par = par
         self.p = _param_array(par)
-        self.s = _State()
+        self.s = _State(state)
 
     def snapshot(self) -> FloatArray:
         """A copy of the filter state (to re-run from), as one array."""
@@ -186,10 +186,13 @@ def _entry_report(mmsi: int, e: FloatArray) -> AisReport:
 class _Vessel:
     """One vessel: its filter, plane origin, recent reports (for re-runs) and output."""
 
-    def __init__(self, mmsi: int, lat0: float, lon0: float, par: KernelParams) -> None:
+    def __init__(
+        self, mmsi: int, lat0: float, lon0: float, par: KernelParams,
+        state: FloatArray | None = None,
+    ) -> None:  # fmt: skip
         self.mmsi = mmsi
         self.lat0, self.lon0 = lat0, lon0
-        self.filter = VesselFilter(par)
+        self.filter = VesselFilter(par, state)
         self.history: list[FloatArray] = []  # _entry arrays
         self.times: list[float] = []
         self.estimate: Estimate | None = None
@@ -324,6 +327,26 @@ class LiveAis:
         v = self.vessels[mmsi]
         est = None if v.estimate is None else v.estimate.numbers()
         return (mmsi, v.lat0, v.lon0, v.name, v.last_t, v.filter.s.numbers(), est)
+
+    def restore_vessels(
+        self, mmsi: NDArray[np.int64], lat0: FloatArray, lon0: FloatArray, names: list[str],
+        t_last: FloatArray, filters: FloatArray, estimates: FloatArray,
+    ) -> None:  # fmt: skip
+        """Vessels from the columns of :meth:`state_row` (a restart), ``filters`` and
+        ``estimates`` as 2-D arrays (a row of NaN: no estimate); as
+        :meth:`restore_vessel` on each row, with the states kept as rows of one array."""
+        filters = np.array(filters, dtype=float, order="C")[:, :_NF]
+        estimates = np.array(estimates, dtype=float, order="C")
+        has_est = ~np.isnan(estimates[:, 0]) if estimates.shape[1] else np.zeros(len(mmsi), bool)
+        rows = zip(mmsi.tolist(), lat0.tolist(), lon0.tolist(), names, t_last.tolist(),
+                   filters, estimates, has_est.tolist(), strict=True)  # fmt: skip
+        for m, la, lo, name, t, f, e, known in rows:
+            v = self.vessels[m] = _Vessel(m, la, lo, self.par, f)
+            v.name = name or ""
+            v.t_restored = t
+            if known:
+                v.estimate = Estimate(e[0], e[1:6], e[6:11], int(e[11]), int(e[12]), e[13])
+                self.changed.add(m)
 
     def restore_vessel(self, row: tuple) -> None:
         """A vessel from :meth:`state_row` (a restart): its filter goes on from that state;

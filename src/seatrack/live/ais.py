@@ -12,10 +12,11 @@ from the past only, the report noise ``sigma_pos_m``); on the same reports the l
 equal :func:`seatrack.filters.ais.track_reports` with that configuration (tested).
 
 Ordering. Each vessel keeps the reports of its last ``window_s`` seconds (message time)
-with the filter state before each. A report at or after the vessel's latest time is
-filtered at once; an earlier one within the window is inserted in time order and the
-vessel re-run from the state before it (the picture then equals the one of the reports
-in time order); an older one is ``late`` and not used (so is an earlier one right after
+with the filter state before one report in :data:`SNAP_EVERY` (and a few older reports
+back to such a state). A report at or after the vessel's latest time is filtered at once;
+an earlier one within the window is inserted in time order and the vessel re-run from the
+latest state kept before it (the picture then equals the one of the reports in time
+order); an older one is ``late`` and not used (so is an earlier one right after
 a restart from the store, whose windows start empty). Each vessel's tangent plane is
 centred on its first report (as the batch tracker's, in time order).
 """
@@ -52,7 +53,9 @@ _SEGMENT = SCALARS.index("segment")
 _NS = len(SCALARS)
 _param_array = functools.lru_cache(maxsize=8)(param_array)  # one array per configuration
 
-__all__ = ["AisReport", "LiveAis", "VesselFilter", "causal_config", "plane_reports"]
+__all__ = [
+    "SNAP_EVERY", "AisReport", "LiveAis", "VesselFilter", "causal_config", "plane_reports",
+]  # fmt: skip
 
 
 def causal_config(base: AisTrackerConfig | None = None) -> AisTrackerConfig:
@@ -167,20 +170,29 @@ class VesselFilter:
 
 _NF = _NS + NX + NX * NX  # numbers of a filter state
 _REPORT = ("t", "x", "y", "v0x", "v0y", "sog", "cog", "lat", "lon", "perf_s")
+_NR = len(_REPORT)
+#: a vessel's history keeps the filter state before one report in this many (and always
+#: before its first entry); a re-run starts from the latest kept state at or before the
+#: report inserted, re-filtering the reports in between as they were
+SNAP_EVERY = 4
 
 
-def _entry(r: AisReport, before: FloatArray) -> FloatArray:
-    """A history entry in one array (memory: one object instead of a report, its ten
-    floats and a state): the filter state before the report, then the report's numbers."""
-    e = np.empty(_NF + len(_REPORT))
+def _entry(r: AisReport, before: FloatArray | None) -> FloatArray:
+    """A history entry in one array: the report's numbers, after the filter state before
+    the report when ``before`` is given (memory: one object per report; a state in one
+    entry of :data:`SNAP_EVERY`)."""
+    rep = (r.t, r.x, r.y, r.v0x, r.v0y, r.sog, r.cog, r.lat, r.lon, r.perf_s)
+    if before is None:
+        return np.array(rep)
+    e = np.empty(_NF + _NR)
     e[:_NF] = before
-    e[_NF:] = (r.t, r.x, r.y, r.v0x, r.v0y, r.sog, r.cog, r.lat, r.lon, r.perf_s)
+    e[_NF:] = rep
     return e
 
 
 def _entry_report(mmsi: int, e: FloatArray) -> AisReport:
     """The report of a history entry."""
-    return AisReport(mmsi, *e[_NF:].tolist())
+    return AisReport(mmsi, *e[-_NR:].tolist())
 
 
 class _Vessel:
@@ -195,6 +207,7 @@ class _Vessel:
         self.filter = VesselFilter(par, state)
         self.history: list[FloatArray] = []  # _entry arrays
         self.times: list[float] = []
+        self.since_state = 0  # entries after the latest one holding a state
         self.estimate: Estimate | None = None
         self.report: AisReport | None = None
         self.name = ""
@@ -205,7 +218,12 @@ class _Vessel:
         return self.times[-1] if self.times else self.t_restored
 
     def run(self, r: AisReport, emitted: list | None) -> Estimate | None:
-        self.history.append(_entry(r, self.filter.s.a))
+        if not self.history or self.since_state >= SNAP_EVERY - 1:
+            self.history.append(_entry(r, self.filter.s.a))
+            self.since_state = 0
+        else:
+            self.history.append(_entry(r, None))
+            self.since_state += 1
         self.times.append(r.t)
         est = self.filter.step(r)
         if est is not None:
@@ -214,9 +232,32 @@ class _Vessel:
                 emitted.append((self, est))
         return est
 
+    def with_state(self, k: int) -> int:
+        """The latest entry at or before ``k`` that holds a filter state."""
+        while self.history[k].size == _NR:
+            k -= 1
+        return k
+
+    def rerun(self, k: int, r: AisReport, emitted: list | None) -> None:
+        """Insert ``r`` before entry ``k`` and filter again from the state kept at or
+        before it (the entries before ``k`` silently: their estimates were emitted)."""
+        j = self.with_state(k)
+        again = [_entry_report(self.mmsi, e) for e in self.history[j:k]]
+        redo = [r] + [_entry_report(self.mmsi, e) for e in self.history[k:]]
+        self.filter.restore(self.history[j][:_NF])
+        del self.history[j:]
+        del self.times[j:]
+        for e in again:
+            self.run(e, None)
+        for e in redo:
+            self.run(e, emitted)
+
     def prune(self, window_s: float) -> None:
+        """Forget the reports older than ``window_s`` before the latest, except those
+        after the latest kept state before the cut."""
         cut = bisect.bisect_left(self.times, self.last_t - window_s)
         if cut:
+            cut = self.with_state(min(cut, len(self.history) - 1))
             del self.history[:cut]
             del self.times[:cut]
 
@@ -286,13 +327,7 @@ class LiveAis:
         if r.t >= v.last_t:
             v.run(r, self.emitted)
         elif r.t >= v.last_t - self.window_s and v.times:
-            k = bisect.bisect_right(v.times, r.t)
-            redo = [r] + [_entry_report(v.mmsi, e) for e in v.history[k:]]
-            v.filter.restore(v.history[k][:_NF])
-            del v.history[k:]
-            del v.times[k:]
-            for e in redo:
-                v.run(e, self.emitted)
+            v.rerun(bisect.bisect_right(v.times, r.t), r, self.emitted)
         else:
             return False
         v.prune(self.window_s)

@@ -5,42 +5,26 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import lru_cache
 
-from scipy.special import chdtr
-from scipy.special import gammaincinv
+from seatrack.kalman import chi2_cdf
+from seatrack.kalman import chi2_ppf
 
 __all__ = ["AisTrackerConfig", "NX", "chi2_quantile", "trim_scale", "CHI2_1_MEDIAN"]
 
 NX = 5  # [x, y, vx, vy, w]
-
-
-def _chi2_ppf(p: float, dof: int) -> float:
-    """Chi-square quantile: ``scipy.stats.chi2.ppf`` (the same special function,
-    ``2 gammaincinv(dof / 2, p)``) without importing ``scipy.stats``, which takes about
-    half a second."""
-    if not 0.0 <= p <= 1.0:
-        return float("nan")
-    if p == 0.0:
-        return 0.0
-    if p == 1.0:
-        return float("inf")
-    return float(2.0 * gammaincinv(dof / 2.0, p))
-
-
 #: median of chi-square with 1 dof (0.4549)
-CHI2_1_MEDIAN = _chi2_ppf(0.5, 1)
+CHI2_1_MEDIAN = chi2_ppf(0.5, 1)
 
 
 @lru_cache(maxsize=64)
 def chi2_quantile(p: float, dof: int) -> float:
     """Chi-square quantile (cached)."""
-    return _chi2_ppf(p, dof)
+    return chi2_ppf(p, dof)
 
 
 @lru_cache(maxsize=64)
 def trim_scale(keep: float) -> float:
-    """``E[X | X <= chi2_1(keep)]`` for ``X ~ chi2_1``: ``F_3(chi2_1(keep)) / keep``
-    (``F_3`` = ``scipy.special.chdtr(3, .)``, as ``scipy.stats.chi2.cdf``)."""
-    return float(chdtr(3, _chi2_ppf(keep, 1)) / keep) if keep < 1.0 else 1.0
+    """``E[X | X <= chi2_1(keep)]`` for ``X ~ chi2_1``: ``F_3(chi2_1(keep)) / keep``."""
+    return chi2_cdf(chi2_ppf(keep, 1), 3) / keep if keep < 1.0 else 1.0
 
 
 @dataclass(frozen=True)

@@ -14,6 +14,7 @@ reads are joined.
 from __future__ import annotations
 
 import asyncio
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -24,8 +25,8 @@ from urllib.parse import urlsplit
 from seatrack.io.table import InputError
 
 __all__ = [
-    "UDP_BATCH", "UDP_RCVBUF", "Chunk", "Source", "UdpReader", "open_udp", "parse_hostport",
-    "parse_source", "run_file", "run_source", "run_tcp",
+    "UDP_BATCH", "UDP_PAUSE_S", "UDP_PENDING", "UDP_RCVBUF", "Chunk", "Source", "UdpReader",
+    "open_udp", "parse_hostport", "parse_source", "run_file", "run_source", "run_tcp",
 ]  # fmt: skip
 
 #: the receive buffer asked for a UDP source, bytes: 32 MiB hold about 1.5 s of 20,000
@@ -82,15 +83,27 @@ def parse_source(text: str, option: str) -> Source:
     return Source("file", path=p)
 
 
+#: Linux's ``SO_RCVBUFFORCE`` (not in Python's socket module): a receive buffer beyond
+#: ``net.core.rmem_max`` for a process with ``CAP_NET_ADMIN``
+_SO_RCVBUFFORCE = 33 if sys.platform.startswith("linux") else None
+
 #: the most datagrams read from one UDP socket per wake-up of the event loop
-UDP_BATCH = 64
+UDP_BATCH = 16
+
+
+#: a UDP source stops reading while this many chunks wait on the queue (and looks again
+#: every :data:`UDP_PAUSE_S`): a backlog stays in the socket's receive buffer, not in the
+#: process's memory
+UDP_PENDING = 64
+UDP_PAUSE_S = 0.005
 
 
 class UdpReader:
     """A UDP source read by the event loop: each time the socket is readable, every
     datagram ready (up to :data:`UDP_BATCH`) is read and queued as one :class:`Chunk`
     (receipt time: when the reading started), so that a burst costs one wake-up and one
-    queue item instead of one per datagram. Closed with :meth:`close`."""
+    queue item instead of one per datagram; paused while :data:`UDP_PENDING` chunks wait.
+    Closed with :meth:`close`."""
 
     def __init__(self, sock: Any, name: str, kind: str, queue: asyncio.Queue,
                  overflow: Callable[[Chunk], None]) -> None:  # fmt: skip
@@ -98,9 +111,25 @@ class UdpReader:
         self.queue, self.overflow = queue, overflow
         self.loop = asyncio.get_running_loop()
         self.loop.add_reader(sock.fileno(), self.ready)
+        self.paused = False
+
+    def resume(self) -> None:
+        """Read again once the queue has room (else look again later)."""
+        if self.sock.fileno() < 0:
+            return
+        if self.queue.qsize() >= UDP_PENDING:
+            self.loop.call_later(UDP_PAUSE_S, self.resume)
+            return
+        self.paused = False
+        self.loop.add_reader(self.sock.fileno(), self.ready)
 
     def ready(self) -> None:
         """Read what is ready (called by the event loop)."""
+        if self.queue.qsize() >= UDP_PENDING:
+            self.paused = True
+            self.loop.remove_reader(self.sock.fileno())
+            self.loop.call_later(UDP_PAUSE_S, self.resume)
+            return
         now, perf = time.time(), time.perf_counter()
         lines: list[bytes] = []
         recv, ais = self.sock.recv, self.kind == "ais"
@@ -129,7 +158,8 @@ class UdpReader:
     def close(self) -> None:
         """Stop reading and close the socket."""
         if self.sock.fileno() >= 0:
-            self.loop.remove_reader(self.sock.fileno())
+            if not self.paused:
+                self.loop.remove_reader(self.sock.fileno())
             self.sock.close()
 
 
@@ -142,7 +172,7 @@ async def open_udp(
 
     sock = socket.socket(socket.AF_INET6 if ":" in src.host else socket.AF_INET,
                          socket.SOCK_DGRAM)  # fmt: skip
-    for opt in (getattr(socket, "SO_RCVBUFFORCE", None), socket.SO_RCVBUF):
+    for opt in (getattr(socket, "SO_RCVBUFFORCE", _SO_RCVBUFFORCE), socket.SO_RCVBUF):
         if opt is None:
             continue
         try:  # Linux caps SO_RCVBUF at net.core.rmem_max (and reports twice the grant)

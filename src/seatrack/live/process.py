@@ -205,11 +205,11 @@ class LiveProcess:
 
     async def consume(self) -> None:
         """The consumer task: chunks off the queue, in bursts (up to 64 chunks or about
-        512 lines: the latency of a burst's first message grows with its size)."""
+        256 lines: the latency of a burst's first message grows with its size)."""
         while True:
             chunks = [await self.queue.get()]
             lines = len(chunks[0].lines)
-            while len(chunks) < 64 and lines < 512:
+            while len(chunks) < 64 and lines < 256:
                 try:
                     chunks.append(self.queue.get_nowait())
                 except asyncio.QueueEmpty:

@@ -88,13 +88,13 @@ def parse_source(text: str, option: str) -> Source:
 _SO_RCVBUFFORCE = 33 if sys.platform.startswith("linux") else None
 
 #: the most datagrams read from one UDP socket per wake-up of the event loop
-UDP_BATCH = 16
+UDP_BATCH = 8
 
 
 #: a UDP source stops reading while this many chunks wait on the queue (and looks again
 #: every :data:`UDP_PAUSE_S`): a backlog stays in the socket's receive buffer, not in the
 #: process's memory
-UDP_PENDING = 64
+UDP_PENDING = 4
 UDP_PAUSE_S = 0.005
 
 

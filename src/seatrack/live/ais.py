@@ -26,6 +26,7 @@ from __future__ import annotations
 import bisect
 import functools
 import math
+import struct
 from dataclasses import dataclass
 from dataclasses import replace
 
@@ -177,22 +178,25 @@ _NR = len(_REPORT)
 SNAP_EVERY = 4
 
 
-def _entry(r: AisReport, before: FloatArray | None) -> FloatArray:
-    """A history entry in one array: the report's numbers, after the filter state before
-    the report when ``before`` is given (memory: one object per report; a state in one
-    entry of :data:`SNAP_EVERY`)."""
-    rep = (r.t, r.x, r.y, r.v0x, r.v0y, r.sog, r.cog, r.lat, r.lon, r.perf_s)
-    if before is None:
-        return np.array(rep)
-    e = np.empty(_NF + _NR)
-    e[:_NF] = before
-    e[_NF:] = rep
-    return e
+_PACK = struct.Struct(f"<{_NR}d")  # a report's numbers in an entry
 
 
-def _entry_report(mmsi: int, e: FloatArray) -> AisReport:
+def _entry(r: AisReport, before: FloatArray | None) -> bytes:
+    """A history entry as bytes: the report's numbers (float64), after the filter state
+    before the report when ``before`` is given (memory: one small object per report, a
+    state in one entry of :data:`SNAP_EVERY`)."""
+    rep = _PACK.pack(r.t, r.x, r.y, r.v0x, r.v0y, r.sog, r.cog, r.lat, r.lon, r.perf_s)
+    return rep if before is None else before.tobytes() + rep
+
+
+def _entry_state(e: bytes) -> FloatArray:
+    """The filter state of a history entry that holds one."""
+    return np.frombuffer(e, np.float64, _NF)
+
+
+def _entry_report(mmsi: int, e: bytes) -> AisReport:
     """The report of a history entry."""
-    return AisReport(mmsi, *e[-_NR:].tolist())
+    return AisReport(mmsi, *_PACK.unpack_from(e, len(e) - _PACK.size))
 
 
 class _Vessel:
@@ -205,7 +209,7 @@ class _Vessel:
         self.mmsi = mmsi
         self.lat0, self.lon0 = lat0, lon0
         self.filter = VesselFilter(par, state)
-        self.history: list[FloatArray] = []  # _entry arrays
+        self.history: list[bytes] = []  # _entry
         self.times: list[float] = []
         self.since_state = 0  # entries after the latest one holding a state
         self.estimate: Estimate | None = None
@@ -234,7 +238,7 @@ class _Vessel:
 
     def with_state(self, k: int) -> int:
         """The latest entry at or before ``k`` that holds a filter state."""
-        while self.history[k].size == _NR:
+        while len(self.history[k]) == _PACK.size:
             k -= 1
         return k
 
@@ -244,7 +248,7 @@ class _Vessel:
         j = self.with_state(k)
         again = [_entry_report(self.mmsi, e) for e in self.history[j:k]]
         redo = [r] + [_entry_report(self.mmsi, e) for e in self.history[k:]]
-        self.filter.restore(self.history[j][:_NF])
+        self.filter.restore(_entry_state(self.history[j]))
         del self.history[j:]
         del self.times[j:]
         for e in again:

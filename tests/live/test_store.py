@@ -244,3 +244,32 @@ def test_sigterm_shuts_down_cleanly_with_the_store_committed(tmp_path):
     assert con.execute("SELECT count(*) FROM ais_reports").fetchone()[0] == 150
     # the 5 MMSIs' vessels, one MMSI split in two by a lasting jump (docs/live.md)
     assert con.execute("SELECT count(*) FROM ais_vessel_state").fetchone()[0] == 6
+
+
+def test_vessel_columns_restore_as_the_rows_do(tmp_path):
+    from seatrack.live.ais import LiveAis
+    from seatrack.live.store import Store
+
+    r = synthetic(seed=5, vessels=4, reports=12)
+    live = LiveAis()
+    live.add(r.mmsi, r.t, r.lat, r.lon, r.sog_kn, r.cog_deg)
+    rows = [live.state_row(m) for m in sorted(live.vessels)]
+    rows[1] = (*rows[1][:3], "NAME", *rows[1][4:6], None)  # a name, no estimate
+    store = Store(tmp_path / "s.duckdb")
+    for row in rows:
+        store.con.execute("INSERT INTO ais_vessel_state VALUES (?, ?, ?, ?, ?, ?, ?)", list(row))
+    by_rows, by_cols = LiveAis(), LiveAis()
+    for row in store.vessel_states():
+        by_rows.restore_vessel(row)
+    by_cols.restore_vessels(**store.vessel_columns())
+    store.close()
+    assert list(by_rows.vessels) == list(by_cols.vessels) and by_rows.changed == by_cols.changed
+    for m, a in by_rows.vessels.items():
+        b = by_cols.vessels[m]
+        assert (a.lat0, a.lon0, a.name, a.t_restored) == (b.lat0, b.lon0, b.name, b.t_restored)
+        np.testing.assert_array_equal(a.filter.s.a, b.filter.s.a)
+        assert (a.estimate is None) == (b.estimate is None)
+        if a.estimate is not None:
+            assert a.estimate.numbers() == b.estimate.numbers()
+    assert by_cols.vessels[rows[1][0]].estimate is None
+    assert by_cols.vessels[rows[1][0]].name == "NAME"

@@ -12,10 +12,11 @@ from the past only, the report noise ``sigma_pos_m``); on the same reports the l
 equal :func:`seatrack.filters.ais.track_reports` with that configuration (tested).
 
 Ordering. Each vessel keeps the reports of its last ``window_s`` seconds (message time)
-with the filter state before each. A report at or after the vessel's latest time is
-filtered at once; an earlier one within the window is inserted in time order and the
-vessel re-run from the state before it (the picture then equals the one of the reports
-in time order); an older one is ``late`` and not used (so is an earlier one right after
+with the filter state before one report in :data:`SNAP_EVERY` (and a few older reports
+back to such a state). A report at or after the vessel's latest time is filtered at once;
+an earlier one within the window is inserted in time order and the vessel re-run from the
+latest state kept before it (the picture then equals the one of the reports in time
+order); an older one is ``late`` and not used (so is an earlier one right after
 a restart from the store, whose windows start empty). Each vessel's tangent plane is
 centred on its first report (as the batch tracker's, in time order).
 """
@@ -25,6 +26,7 @@ from __future__ import annotations
 import bisect
 import functools
 import math
+import struct
 from dataclasses import dataclass
 from dataclasses import replace
 
@@ -52,7 +54,9 @@ _SEGMENT = SCALARS.index("segment")
 _NS = len(SCALARS)
 _param_array = functools.lru_cache(maxsize=8)(param_array)  # one array per configuration
 
-__all__ = ["AisReport", "LiveAis", "VesselFilter", "causal_config", "plane_reports"]
+__all__ = [
+    "SNAP_EVERY", "AisReport", "LiveAis", "VesselFilter", "causal_config", "plane_reports",
+]  # fmt: skip
 
 
 def causal_config(base: AisTrackerConfig | None = None) -> AisTrackerConfig:
@@ -139,10 +143,10 @@ class VesselFilter:
     per-report logic with ``smooth=False``, no withheld rows, no timestamp offsets and
     the report noise ``sigma_pos_m``; compiled: :func:`~seatrack.live.ais_step.causal_step`)."""
 
-    def __init__(self, par: KernelParams) -> None:
+    def __init__(self, par: KernelParams, state: FloatArray | None = None) -> None:
         self.par = par
         self.p = _param_array(par)
-        self.s = _State()
+        self.s = _State(state)
 
     def snapshot(self) -> FloatArray:
         """A copy of the filter state (to re-run from), as one array."""
@@ -167,31 +171,47 @@ class VesselFilter:
 
 _NF = _NS + NX + NX * NX  # numbers of a filter state
 _REPORT = ("t", "x", "y", "v0x", "v0y", "sog", "cog", "lat", "lon", "perf_s")
+_NR = len(_REPORT)
+#: a vessel's history keeps the filter state before one report in this many (and always
+#: before its first entry); a re-run starts from the latest kept state at or before the
+#: report inserted, re-filtering the reports in between as they were
+SNAP_EVERY = 4
 
 
-def _entry(r: AisReport, before: FloatArray) -> FloatArray:
-    """A history entry in one array (memory: one object instead of a report, its ten
-    floats and a state): the filter state before the report, then the report's numbers."""
-    e = np.empty(_NF + len(_REPORT))
-    e[:_NF] = before
-    e[_NF:] = (r.t, r.x, r.y, r.v0x, r.v0y, r.sog, r.cog, r.lat, r.lon, r.perf_s)
-    return e
+_PACK = struct.Struct(f"<{_NR}d")  # a report's numbers in an entry
 
 
-def _entry_report(mmsi: int, e: FloatArray) -> AisReport:
+def _entry(r: AisReport, before: FloatArray | None) -> bytes:
+    """A history entry as bytes: the report's numbers (float64), after the filter state
+    before the report when ``before`` is given (memory: one small object per report, a
+    state in one entry of :data:`SNAP_EVERY`)."""
+    rep = _PACK.pack(r.t, r.x, r.y, r.v0x, r.v0y, r.sog, r.cog, r.lat, r.lon, r.perf_s)
+    return rep if before is None else before.tobytes() + rep
+
+
+def _entry_state(e: bytes) -> FloatArray:
+    """The filter state of a history entry that holds one."""
+    return np.frombuffer(e, np.float64, _NF)
+
+
+def _entry_report(mmsi: int, e: bytes) -> AisReport:
     """The report of a history entry."""
-    return AisReport(mmsi, *e[_NF:].tolist())
+    return AisReport(mmsi, *_PACK.unpack_from(e, len(e) - _PACK.size))
 
 
 class _Vessel:
     """One vessel: its filter, plane origin, recent reports (for re-runs) and output."""
 
-    def __init__(self, mmsi: int, lat0: float, lon0: float, par: KernelParams) -> None:
+    def __init__(
+        self, mmsi: int, lat0: float, lon0: float, par: KernelParams,
+        state: FloatArray | None = None,
+    ) -> None:  # fmt: skip
         self.mmsi = mmsi
         self.lat0, self.lon0 = lat0, lon0
-        self.filter = VesselFilter(par)
-        self.history: list[FloatArray] = []  # _entry arrays
+        self.filter = VesselFilter(par, state)
+        self.history: list[bytes] = []  # _entry
         self.times: list[float] = []
+        self.since_state = 0  # entries after the latest one holding a state
         self.estimate: Estimate | None = None
         self.report: AisReport | None = None
         self.name = ""
@@ -202,7 +222,12 @@ class _Vessel:
         return self.times[-1] if self.times else self.t_restored
 
     def run(self, r: AisReport, emitted: list | None) -> Estimate | None:
-        self.history.append(_entry(r, self.filter.s.a))
+        if not self.history or self.since_state >= SNAP_EVERY - 1:
+            self.history.append(_entry(r, self.filter.s.a))
+            self.since_state = 0
+        else:
+            self.history.append(_entry(r, None))
+            self.since_state += 1
         self.times.append(r.t)
         est = self.filter.step(r)
         if est is not None:
@@ -211,9 +236,32 @@ class _Vessel:
                 emitted.append((self, est))
         return est
 
+    def with_state(self, k: int) -> int:
+        """The latest entry at or before ``k`` that holds a filter state."""
+        while len(self.history[k]) == _PACK.size:
+            k -= 1
+        return k
+
+    def rerun(self, k: int, r: AisReport, emitted: list | None) -> None:
+        """Insert ``r`` before entry ``k`` and filter again from the state kept at or
+        before it (the entries before ``k`` silently: their estimates were emitted)."""
+        j = self.with_state(k)
+        again = [_entry_report(self.mmsi, e) for e in self.history[j:k]]
+        redo = [r] + [_entry_report(self.mmsi, e) for e in self.history[k:]]
+        self.filter.restore(_entry_state(self.history[j]))
+        del self.history[j:]
+        del self.times[j:]
+        for e in again:
+            self.run(e, None)
+        for e in redo:
+            self.run(e, emitted)
+
     def prune(self, window_s: float) -> None:
+        """Forget the reports older than ``window_s`` before the latest, except those
+        after the latest kept state before the cut."""
         cut = bisect.bisect_left(self.times, self.last_t - window_s)
         if cut:
+            cut = self.with_state(min(cut, len(self.history) - 1))
             del self.history[:cut]
             del self.times[:cut]
 
@@ -283,13 +331,7 @@ class LiveAis:
         if r.t >= v.last_t:
             v.run(r, self.emitted)
         elif r.t >= v.last_t - self.window_s and v.times:
-            k = bisect.bisect_right(v.times, r.t)
-            redo = [r] + [_entry_report(v.mmsi, e) for e in v.history[k:]]
-            v.filter.restore(v.history[k][:_NF])
-            del v.history[k:]
-            del v.times[k:]
-            for e in redo:
-                v.run(e, self.emitted)
+            v.rerun(bisect.bisect_right(v.times, r.t), r, self.emitted)
         else:
             return False
         v.prune(self.window_s)
@@ -324,6 +366,26 @@ class LiveAis:
         v = self.vessels[mmsi]
         est = None if v.estimate is None else v.estimate.numbers()
         return (mmsi, v.lat0, v.lon0, v.name, v.last_t, v.filter.s.numbers(), est)
+
+    def restore_vessels(
+        self, mmsi: NDArray[np.int64], lat0: FloatArray, lon0: FloatArray, names: list[str],
+        t_last: FloatArray, filters: FloatArray, estimates: FloatArray,
+    ) -> None:  # fmt: skip
+        """Vessels from the columns of :meth:`state_row` (a restart), ``filters`` and
+        ``estimates`` as 2-D arrays (a row of NaN: no estimate); as
+        :meth:`restore_vessel` on each row, with the states kept as rows of one array."""
+        filters = np.array(filters, dtype=float, order="C")[:, :_NF]
+        estimates = np.array(estimates, dtype=float, order="C")
+        has_est = ~np.isnan(estimates[:, 0]) if estimates.shape[1] else np.zeros(len(mmsi), bool)
+        rows = zip(mmsi.tolist(), lat0.tolist(), lon0.tolist(), names, t_last.tolist(),
+                   filters, estimates, has_est.tolist(), strict=True)  # fmt: skip
+        for m, la, lo, name, t, f, e, known in rows:
+            v = self.vessels[m] = _Vessel(m, la, lo, self.par, f)
+            v.name = name or ""
+            v.t_restored = t
+            if known:
+                v.estimate = Estimate(e[0], e[1:6], e[6:11], int(e[11]), int(e[12]), e[13])
+                self.changed.add(m)
 
     def restore_vessel(self, row: tuple) -> None:
         """A vessel from :meth:`state_row` (a restart): its filter goes on from that state;

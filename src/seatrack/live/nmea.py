@@ -21,6 +21,7 @@ from __future__ import annotations
 import binascii
 import re
 from collections import OrderedDict
+from collections import deque
 from dataclasses import dataclass
 from dataclasses import field
 from typing import Any
@@ -160,22 +161,30 @@ class Assembler:
 
 
 class Duplicates:
-    """The same message seen again within ``window_s`` seconds of receipt time."""
+    """The same message seen again within ``window_s`` seconds of receipt time (the keys
+    in a set, with their receipt times in arrival order to forget them: less memory than
+    an ordered dictionary for the 200,000 keys of 10 s at 20,000 msg/s)."""
 
     def __init__(self, window_s: float = 10.0) -> None:
         self.window_s = window_s
-        self._seen: OrderedDict[bytes, float] = OrderedDict()
+        self._keys: set[bytes] = set()
+        self._order: deque[bytes] = deque()
+        self._times: deque[float] = deque()
+
+    def __len__(self) -> int:
+        return len(self._keys)
 
     def seen(self, key: bytes, now_s: float) -> bool:
         """True if ``key`` was seen within the window (else it is remembered now)."""
-        while self._seen:
-            k, t = next(iter(self._seen.items()))
-            if now_s - t <= self.window_s:
-                break
-            del self._seen[k]
-        if key in self._seen:
+        times = self._times
+        while times and now_s - times[0] > self.window_s:
+            times.popleft()
+            self._keys.discard(self._order.popleft())
+        if key in self._keys:
             return True
-        self._seen[key] = now_s
+        self._keys.add(key)
+        self._order.append(key)
+        times.append(now_s)
         return False
 
 

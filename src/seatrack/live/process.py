@@ -29,15 +29,14 @@ from typing import Any
 import numpy as np
 
 from seatrack.geometry import KNOT_MPS
-from seatrack.io.ais.reports import TIME_MAX
-from seatrack.io.ais.reports import TIME_MIN
 from seatrack.live.ais import LiveAis
 from seatrack.live.counters import Counters
+from seatrack.live.ingest import Positions
+from seatrack.live.ingest import read_lines
+from seatrack.live.ingest import read_messages
 from seatrack.live.nmea import Assembler
-from seatrack.live.nmea import Decoded
 from seatrack.live.nmea import Duplicates
 from seatrack.live.nmea import Message
-from seatrack.live.nmea import decode_message
 from seatrack.live.picture import Picture
 from seatrack.live.sources import Chunk
 from seatrack.live.sources import Source
@@ -161,52 +160,43 @@ class LiveProcess:
 
     def handle(self, chunks: list[Chunk]) -> None:
         """Process chunks of lines (AIS messages, radar datagrams)."""
-        messages: list[Message] = []
+        pos = Positions()
         for c in chunks:
             if c.kind == "plots":
                 if self.radar is not None:
                     for data in c.lines:
                         self.radar.datagram(data, c.received_s, c.perf_s)
                 continue
-            for line in c.lines:
-                messages.extend(self.assembler.push(line, c.source, c.received_s, c.perf_s))
-        messages.extend(self.assembler.expire(time.time()))
-        if messages:
-            self.handle_messages(messages)
+            read_lines(c.lines, c.source, c.received_s, c.perf_s, self.assembler,
+                       self.duplicates, self.counters, pos, self._name)  # fmt: skip
+        expired = self.assembler.expire(time.time())
+        if expired:
+            read_messages(expired, self.duplicates, self.counters, pos, self._name)
+        if len(pos):
+            self.track(pos)
 
     def handle_messages(self, messages: list[Message]) -> None:
         """Count, de-duplicate, decode and track complete messages."""
+        pos = Positions()
+        read_messages(messages, self.duplicates, self.counters, pos, self._name)
+        if len(pos):
+            self.track(pos)
+
+    def _name(self, mmsi: int, name: str) -> None:
+        if self.names.get(mmsi) != name:
+            self.names[mmsi] = name
+            if mmsi in self.ais.vessels:
+                self.ais.dirty.add(mmsi)
+                self.ais.changed.add(mmsi)
+
+    def track(self, pos: Positions) -> None:
+        """Fold position reports into the AIS picture and count them."""
         cnt = self.counters
-        pos: list[tuple[Decoded, Message]] = []
-        for m in messages:
-            if m.reject:
-                cnt.reject(m.reject)
-                continue
-            if self.duplicates.seen(m.payload_key, m.received_s):
-                cnt.received += 1
-                cnt.duplicate += 1
-                continue
-            d = decode_message(m.sentences)
-            if isinstance(d, str):
-                cnt.reject(d)
-            elif not TIME_MIN <= m.time_s < TIME_MAX:
-                cnt.reject("time out of range")
-            elif d.is_position:
-                pos.append((d, m))
-            else:
-                if d.name and self.names.get(d.mmsi) != d.name:
-                    self.names[d.mmsi] = d.name
-                    if d.mmsi in self.ais.vessels:
-                        self.ais.dirty.add(d.mmsi)
-                        self.ais.changed.add(d.mmsi)
-                cnt.received += 1
-                cnt.decoded += 1
-        if not pos:
-            return
         emitted = self.ais.emitted if self.fusion is not None else None
         n0 = 0 if emitted is None else len(emitted)
-        rows = np.array([(m.time_s, d.lat, d.lon, d.sog_kn, d.cog_deg) for d, m in pos])
-        keys = self.identities.route(np.array([d.mmsi for d, _ in pos], np.int64), rows)
+        c = pos.columns()
+        rows = np.column_stack((c["t"], c["lat"], c["lon"], c["sog_kn"], c["cog_deg"]))
+        keys = self.identities.route(c["mmsi"], rows)
         used = self.ais.add(keys, rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4])
         if self.fusion is not None and emitted is not None:  # every used report's state
             self.fusion.add_estimates(emitted[n0:])
@@ -217,23 +207,27 @@ class LiveProcess:
         cnt.decoded += n_used
         cnt.positions += n_used
         cnt.late += len(pos) - n_used
-        now = time.perf_counter()
-        cnt.latency.add([now - m.perf_s for (_, m), u in zip(pos, used, strict=True) if u])
+        cnt.latency.add(time.perf_counter() - c["perf_s"][used])
         if self.writer is not None:
-            self.writer.ais_reports([
-                (d.mmsi, m.time_s, d.lat, d.lon, d.sog_kn, d.cog_deg, m.source, m.received_s)
-                for (d, m), u in zip(pos, used, strict=True) if u
-            ])  # fmt: skip
+            k = np.flatnonzero(used)
+            self.writer.ais_reports(list(zip(
+                c["mmsi"][k].tolist(), c["t"][k].tolist(), c["lat"][k].tolist(),
+                c["lon"][k].tolist(), c["sog_kn"][k].tolist(), c["cog_deg"][k].tolist(),
+                [pos.sources[j] for j in k.tolist()], c["received_s"][k].tolist(), strict=True,
+            )))  # fmt: skip
 
     async def consume(self) -> None:
-        """The consumer task: chunks off the queue, in bursts."""
+        """The consumer task: chunks off the queue, in bursts (up to 64 chunks or about
+        256 lines: the latency of a burst's first message grows with its size)."""
         while True:
             chunks = [await self.queue.get()]
-            while len(chunks) < 64:
+            lines = len(chunks[0].lines)
+            while len(chunks) < 64 and lines < 256:
                 try:
                     chunks.append(self.queue.get_nowait())
                 except asyncio.QueueEmpty:
                     break
+                lines += len(chunks[-1].lines)
             self.handle(chunks)
             for _ in chunks:
                 self.queue.task_done()

@@ -5,25 +5,28 @@ AIS sources are split into lines; plot sources (``kind="plots"``) are UDP datagr
 FILE, each passed whole (binary CAT048 or CSV text). Each source puts :class:`Chunk` items
 (the source's name, its lines, the receipt time as Unix seconds and as
 ``time.perf_counter()``) on a bounded asyncio queue. A TCP or FILE source waits when the
-queue is full (back-pressure); a UDP datagram cannot wait, so one that arrives on a full
-queue is handed to ``on_overflow`` (the process counts its lines as rejected, ``"queue
-full"``). Lines split across TCP reads are joined.
+queue is full (back-pressure); a UDP source reads every datagram ready at once into one
+chunk, and cannot wait, so a chunk that finds the queue full is handed to ``on_overflow``
+(the process counts its lines as rejected, ``"queue full"``). Lines split across TCP
+reads are joined.
 """
 
 from __future__ import annotations
 
 import asyncio
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 from urllib.parse import urlsplit
 
 from seatrack.io.table import InputError
 
 __all__ = [
-    "UDP_RCVBUF", "Chunk", "Source", "open_udp", "parse_hostport", "parse_source", "run_file",
-    "run_source", "run_tcp",
+    "UDP_BATCH", "UDP_PAUSE_S", "UDP_PENDING", "UDP_RCVBUF", "Chunk", "Source", "UdpReader",
+    "open_udp", "parse_hostport", "parse_source", "run_file", "run_source", "run_tcp",
 ]  # fmt: skip
 
 #: the receive buffer asked for a UDP source, bytes: 32 MiB hold about 1.5 s of 20,000
@@ -80,37 +83,106 @@ def parse_source(text: str, option: str) -> Source:
     return Source("file", path=p)
 
 
-class _Udp(asyncio.DatagramProtocol):
-    def __init__(self, name: str, kind: str, queue: asyncio.Queue, overflow: Callable) -> None:
-        self.name, self.kind, self.queue, self.overflow = name, kind, queue, overflow
+#: Linux's ``SO_RCVBUFFORCE`` (not in Python's socket module): a receive buffer beyond
+#: ``net.core.rmem_max`` for a process with ``CAP_NET_ADMIN``
+_SO_RCVBUFFORCE = 33 if sys.platform.startswith("linux") else None
 
-    def datagram_received(self, data: bytes, addr: object) -> None:
-        lines = data.splitlines() if self.kind == "ais" else [data]  # plots: binary, whole
-        chunk = Chunk(self.name, lines, time.time(), time.perf_counter(), self.kind)
-        try:
-            self.queue.put_nowait(chunk)
-        except asyncio.QueueFull:
-            self.overflow(chunk)
+#: the most datagrams read from one UDP socket per wake-up of the event loop
+UDP_BATCH = 8
+
+
+#: a UDP source stops reading while this many chunks wait on the queue (and looks again
+#: every :data:`UDP_PAUSE_S`): a backlog stays in the socket's receive buffer, not in the
+#: process's memory
+UDP_PENDING = 4
+UDP_PAUSE_S = 0.005
+
+
+class UdpReader:
+    """A UDP source read by the event loop: each time the socket is readable, every
+    datagram ready (up to :data:`UDP_BATCH`) is read and queued as one :class:`Chunk`
+    (receipt time: when the reading started), so that a burst costs one wake-up and one
+    queue item instead of one per datagram; paused while :data:`UDP_PENDING` chunks wait.
+    Closed with :meth:`close`."""
+
+    def __init__(self, sock: Any, name: str, kind: str, queue: asyncio.Queue,
+                 overflow: Callable[[Chunk], None]) -> None:  # fmt: skip
+        self.sock, self.name, self.kind = sock, name, kind
+        self.queue, self.overflow = queue, overflow
+        self.loop = asyncio.get_running_loop()
+        self.loop.add_reader(sock.fileno(), self.ready)
+        self.paused = False
+
+    def resume(self) -> None:
+        """Read again once the queue has room (else look again later)."""
+        if self.sock.fileno() < 0:
+            return
+        if self.queue.qsize() >= UDP_PENDING:
+            self.loop.call_later(UDP_PAUSE_S, self.resume)
+            return
+        self.paused = False
+        self.loop.add_reader(self.sock.fileno(), self.ready)
+
+    def ready(self) -> None:
+        """Read what is ready (called by the event loop)."""
+        if self.queue.qsize() >= UDP_PENDING:
+            self.paused = True
+            self.loop.remove_reader(self.sock.fileno())
+            self.loop.call_later(UDP_PAUSE_S, self.resume)
+            return
+        now, perf = time.time(), time.perf_counter()
+        lines: list[bytes] = []
+        recv, ais = self.sock.recv, self.kind == "ais"
+        for _ in range(UDP_BATCH):
+            try:
+                data = recv(1 << 16)
+            except (BlockingIOError, InterruptedError):
+                break
+            except OSError:  # pragma: no cover - e.g. an ICMP error reported on the socket
+                break
+            if ais:
+                lines.extend(data.splitlines())
+            else:
+                lines.append(data)  # plots: binary, whole
+        if lines:
+            chunk = Chunk(self.name, lines, now, perf, self.kind)
+            try:
+                self.queue.put_nowait(chunk)
+            except asyncio.QueueFull:
+                self.overflow(chunk)
+
+    def get_extra_info(self, name: str) -> Any:
+        """``"sockname"``: the bound address (as an asyncio transport's)."""
+        return self.sock.getsockname() if name == "sockname" else None
+
+    def close(self) -> None:
+        """Stop reading and close the socket."""
+        if self.sock.fileno() >= 0:
+            if not self.paused:
+                self.loop.remove_reader(self.sock.fileno())
+            self.sock.close()
 
 
 async def open_udp(
     src: Source, queue: asyncio.Queue, overflow: Callable[[Chunk], None], kind: str = "ais"
-) -> asyncio.DatagramTransport:
-    """Bind a UDP source (receive buffer enlarged where the system allows)."""
+) -> UdpReader:
+    """Bind a UDP source (receive buffer enlarged: beyond ``net.core.rmem_max`` where the
+    process may, with ``SO_RCVBUFFORCE``, else up to it)."""
     import socket
 
-    loop = asyncio.get_running_loop()
     sock = socket.socket(socket.AF_INET6 if ":" in src.host else socket.AF_INET,
                          socket.SOCK_DGRAM)  # fmt: skip
-    try:  # Linux caps the request at net.core.rmem_max (and reports twice the grant)
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, UDP_RCVBUF)
-    except OSError:  # pragma: no cover - system limit
-        pass
+    for opt in (getattr(socket, "SO_RCVBUFFORCE", _SO_RCVBUFFORCE), socket.SO_RCVBUF):
+        if opt is None:
+            continue
+        try:  # Linux caps SO_RCVBUF at net.core.rmem_max (and reports twice the grant)
+            sock.setsockopt(socket.SOL_SOCKET, opt, UDP_RCVBUF)
+            break
+        except OSError:  # not privileged (SO_RCVBUFFORCE), or a system limit
+            pass
     sock.bind((src.host, src.port))
-    transport, _ = await loop.create_datagram_endpoint(
-        lambda: _Udp(src.name, kind, queue, overflow), sock=sock
-    )
-    return transport
+    sock.setblocking(False)
+    return UdpReader(sock, src.name, kind, queue, overflow)
 
 
 async def run_tcp(
@@ -182,8 +254,8 @@ async def run_source(
     overflow: Callable[[Chunk], None],
     on_reconnect: Callable[[], None],
     kind: str = "ais",
-) -> asyncio.DatagramTransport | None:
-    """Start a source: UDP returns its transport (closed by the caller); TCP runs until
+) -> UdpReader | None:
+    """Start a source: UDP returns its reader (closed by the caller); TCP runs until
     cancelled; FILE returns once its lines are queued."""
     if src.kind == "udp":
         return await open_udp(src, queue, overflow, kind)

@@ -121,6 +121,31 @@ class Store:
             "SELECT mmsi, lat0_deg, lon0_deg, name, t_last, filter, estimate FROM ais_vessel_state"
         ).fetchall()
 
+    def vessel_columns(self) -> dict[str, Any]:
+        """The columns of :meth:`vessel_states` as arrays (``filter`` and ``estimate`` as
+        2-D arrays, NaN rows for a missing estimate): far faster than rows."""
+        c = self.con.execute(
+            "SELECT mmsi, lat0_deg, lon0_deg, name, t_last, filter, estimate FROM ais_vessel_state"
+        ).fetchnumpy()
+        n = len(c["mmsi"])
+
+        def matrix(col: Any) -> np.ndarray:
+            rows = [np.asarray(r, dtype=float) if r is not None and r is not np.ma.masked
+                    else None for r in col]  # fmt: skip
+            width = max((r.size for r in rows if r is not None), default=0)
+            out = np.full((n, width), np.nan)
+            for k, r in enumerate(rows):
+                if r is not None:
+                    out[k, : r.size] = r
+            return out
+
+        return {
+            "mmsi": np.asarray(c["mmsi"], dtype=np.int64), "lat0": np.asarray(c["lat0_deg"], float),
+            "lon0": np.asarray(c["lon0_deg"], float), "names": [str(x or "") for x in c["name"]],
+            "t_last": np.asarray(c["t_last"], float), "filters": matrix(c["filter"]),
+            "estimates": matrix(c["estimate"]),
+        }  # fmt: skip
+
     def radar(self) -> tuple[float, Any, Any] | None:
         """``(last_t, tracker, views)`` as last committed, or None."""
         row = self.con.execute("SELECT last_t, tracker, views FROM radar_state").fetchone()
@@ -239,10 +264,9 @@ class StoreWriter:
         and radar tracks restored."""
         from collections import Counter
 
-        rows = self.store.vessel_states()
-        for row in rows:
-            ais.restore_vessel(row)
-        n = len(rows)
+        cols = self.store.vessel_columns()
+        ais.restore_vessels(**cols)
+        n = len(cols["mmsi"])
         saved = self.store.radar() if radar is not None else None
         if saved is not None:
             radar.last_t, radar.scans.tracker, radar.current = saved

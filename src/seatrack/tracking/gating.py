@@ -37,12 +37,12 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 from scipy.spatial import cKDTree
-from scipy.stats import chi2
 
 from seatrack.filters.base import Plots
 from seatrack.filters.base import RecursiveFilter
 from seatrack.filters.base import SensorNoise
 from seatrack.filters.base import TrackState
+from seatrack.kalman import chi2_ppf
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -76,7 +76,7 @@ def gate_threshold(probability: float, m: int) -> float:
     """Chi-square quantile ``gamma`` with ``P(d^2 <= gamma) = probability`` for ``m`` dof."""
     if not 0 < probability < 1:
         raise ValueError(f"gate probability must be in (0, 1), got {probability}")
-    return float(chi2.ppf(probability, m))
+    return chi2_ppf(probability, m)
 
 
 @dataclass(frozen=True)

@@ -5,27 +5,27 @@ from __future__ import annotations
 from dataclasses import dataclass
 from functools import lru_cache
 
-from scipy.stats import chi2
-
 from seatrack.config import require
+from seatrack.kalman import chi2_cdf
+from seatrack.kalman import chi2_ppf
 
 __all__ = ["AisTrackerConfig", "NX", "chi2_quantile", "trim_scale", "CHI2_1_MEDIAN"]
 
 NX = 5  # [x, y, vx, vy, w]
 #: median of chi-square with 1 dof (0.4549)
-CHI2_1_MEDIAN = float(chi2.ppf(0.5, 1))
+CHI2_1_MEDIAN = chi2_ppf(0.5, 1)
 
 
 @lru_cache(maxsize=64)
 def chi2_quantile(p: float, dof: int) -> float:
-    """Chi-square quantile (cached: SciPy's costs ~0.3 ms a call)."""
-    return float(chi2.ppf(p, dof))
+    """Chi-square quantile (cached)."""
+    return chi2_ppf(p, dof)
 
 
 @lru_cache(maxsize=64)
 def trim_scale(keep: float) -> float:
     """``E[X | X <= chi2_1(keep)]`` for ``X ~ chi2_1``: ``F_3(chi2_1(keep)) / keep``."""
-    return float(chi2.cdf(chi2.ppf(keep, 1), 3) / keep) if keep < 1.0 else 1.0
+    return chi2_cdf(chi2_ppf(keep, 1), 3) / keep if keep < 1.0 else 1.0
 
 
 @dataclass(frozen=True)

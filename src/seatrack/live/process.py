@@ -197,7 +197,7 @@ class LiveProcess:
         c = pos.columns()
         rows = np.column_stack((c["t"], c["lat"], c["lon"], c["sog_kn"], c["cog_deg"]))
         keys = self.identities.route(c["mmsi"], rows)
-        used = self.ais.add(keys, rows[:, 0], rows[:, 1], rows[:, 2], rows[:, 3], rows[:, 4])
+        used = self.ais.add(keys, c["t"], c["lat"], c["lon"], c["sog_kn"], c["cog_deg"])
         if self.fusion is not None and emitted is not None:  # every used report's state
             self.fusion.add_estimates(emitted[n0:])
             if self._fusion_emitted:

@@ -20,6 +20,7 @@ from seatrack.io.table import InputError
 __all__ = [
     "evaluate",
     "Evaluation",
+    "EvaluationOptions",
     "run_evaluation",
     "method_names",
     "config_error",
@@ -113,40 +114,42 @@ class Evaluation:
         return pd.DataFrame([{k: r.get(k) for k in keys} for r in self.rows], columns=keys)
 
 
-def evaluation_options(
-    sc: Any,
-    runs: int | None = None,
-    seed: int | None = None,
-    sensor: str | None = None,
-    skip: int = 3,
-    processes: int = 1,
-) -> tuple[int, int, Any]:
+@dataclasses.dataclass(frozen=True)
+class EvaluationOptions:
+    """The options of a comparison, by the names of :func:`evaluate` (``None``: the
+    scenario's, or every method); checked by :func:`evaluation_options`."""
+
+    methods: str | Sequence[str] | None = None
+    runs: int | None = None
+    seed: int | None = None
+    sensor: str | None = None
+    skip: int = 3
+    processes: int = 1
+
+
+def evaluation_options(sc: Any, options: EvaluationOptions) -> tuple[int, int, Any]:
     """The number of runs, the seed and the tracking sensor of an evaluation of scenario
     ``sc``, every option checked (by its command-line name) before any work."""
     from seatrack.evaluate.tracking import tracking_sensor
     from seatrack.simulate.scenarios import MAX_RUNS
 
-    n = sc.runs if runs is None else runs
-    s = sc.seed if seed is None else seed
+    n = sc.runs if options.runs is None else options.runs
+    s = sc.seed if options.seed is None else options.seed
     option_in("--runs", n, 1, MAX_RUNS)
-    option_in("--processes", processes, 1, MAX_PROCESSES)
+    option_in("--processes", options.processes, 1, MAX_PROCESSES)
     option_in("--seed", s, 0, 2**63 - 1)
     try:
-        sens = tracking_sensor(sc, sensor)
+        sens = tracking_sensor(sc, options.sensor)
     except ValueError as exc:
-        raise InputError(f"{'--sensor' if sensor is not None else sc.path}: {exc}") from None
-    check_skip(skip, sens.scan_times(sc.duration).size, sens.name)
+        where = "--sensor" if options.sensor is not None else sc.path
+        raise InputError(f"{where}: {exc}") from None
+    check_skip(options.skip, sens.scan_times(sc.duration).size, sens.name)
     return n, s, sens
 
 
 def run_evaluation(
     sc: Any,
-    methods: str | Sequence[str] | None = None,
-    runs: int | None = None,
-    seed: int | None = None,
-    sensor: str | None = None,
-    skip: int = 3,
-    processes: int = 1,
+    options: EvaluationOptions,
     progress: bool = False,
     outputs: Sequence[Path | None] = (),
     folders: Sequence[Path | None] = (),
@@ -160,8 +163,9 @@ def run_evaluation(
     from seatrack.evaluate.tracking import summarize
     from seatrack.progress import Progress
 
-    names = method_names(methods)
-    n, s, sens = evaluation_options(sc, runs, seed, sensor, skip, processes)
+    names = method_names(options.methods)
+    n, s, sens = evaluation_options(sc, options)
+    processes, skip = options.processes, options.skip
     seconds = require_evaluation(sc, sens, names, n, processes)
     prepare_outputs(outputs, folders)
     errors = trial_errors(sc, sens, names, s)
@@ -225,7 +229,8 @@ def evaluate(
 
     sc = load(scenario)
     if sc.multitarget is None:
-        return run_evaluation(sc, methods, runs, seed, sensor, skip, processes).frame()
+        options = EvaluationOptions(methods, runs, seed, sensor, skip, processes)
+        return run_evaluation(sc, options).frame()
     from seatrack.evaluate.multitarget import evaluate_multitarget
 
     mt = None if methods is None else method_names(methods)

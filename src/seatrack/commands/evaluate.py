@@ -52,6 +52,7 @@ def register(app: typer.Typer) -> None:
         the 95% chi-square bounds, and the time per plot. Results do not depend on
         --processes.
         """
+        from seatrack.api.evaluate import EvaluationOptions
         from seatrack.api.evaluate import evaluation_options
         from seatrack.api.evaluate import run_evaluation
         from seatrack.api.options import prepare_outputs
@@ -61,7 +62,8 @@ def register(app: typer.Typer) -> None:
         source = resolve_scenario(scenario)
         prepare_outputs({"--csv": csv_out}, {"--plots": plots}, inputs=[source])
         sc = load(source)
-        n, s, _ = evaluation_options(sc, runs, seed, sensor, skip, processes)
+        options = EvaluationOptions(methods, runs, seed, sensor, skip, processes)
+        n, s, _ = evaluation_options(sc, options)
         if sc.multitarget is not None:  # unlabelled plots: the multi-target tracker
             from seatrack.evaluate.multitarget import evaluate_multitarget
 
@@ -71,9 +73,7 @@ def register(app: typer.Typer) -> None:
             )
             return
         pngs = [plots / "pos_rmse.png", plots / "anees.png"] if plots is not None else []
-        ev = run_evaluation(
-            sc, methods, runs, seed, sensor, skip, processes, progress, [csv_out, *pngs], [plots]
-        )
+        ev = run_evaluation(sc, options, progress, [csv_out, *pngs], [plots])
         print_summary(ev.rows, ev.title, ev.runs, ev.result.elapsed_s, ev.errors, ev.crb, skip)
         if csv_out is not None:
             write_summary_csv(csv_out, ev.rows)

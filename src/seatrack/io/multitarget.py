@@ -72,6 +72,7 @@ __all__ = [
     "track_unlabelled_file",
     "run_unlabelled",
     "tracker_setup",
+    "TrackerSetup",
     "tracks_text",
     "write_outputs",
     "UnlabelledRun",
@@ -338,39 +339,49 @@ class UnlabelledRun:
         )  # fmt: skip
 
 
+@dataclass(frozen=True)
+class TrackerSetup:
+    """A parsed configuration table of the multi-target tracker (:func:`tracker_setup`):
+    the plots' noise, the tracker keys and the per-track method's table (method keys plus
+    the sensor keys, as :func:`seatrack.filters.registry.build` takes it); ``source``
+    names the table in error messages."""
+
+    sensor: SensorNoise
+    tracker: TrackerConfig
+    method_table: dict[str, Any]
+    source: str = "config"
+
+
 def tracker_setup(
     table: Mapping[str, Any], source: str = "config", association: str | None = None
-) -> tuple[TrackerConfig, SensorNoise, dict[str, Any]]:
-    """The tracker configuration, the sensor noise and the method table of a configuration
-    table (:func:`split_config`); ``association`` (``gnn`` or ``jpda``) overrides the
-    table's."""
+) -> TrackerSetup:
+    """The :class:`TrackerSetup` of a configuration table (:func:`split_config`);
+    ``association`` (``gnn`` or ``jpda``) overrides the table's."""
     t_tab, m_tab = split_config(table, source)
     if association is not None:
         if association not in ("gnn", "jpda"):
             raise InputError(f"--association: must be gnn or jpda, got {association!r}")
         t_tab = {**t_tab, "association": association}
     tcfg = parse_config(TrackerConfig, t_tab, source=source)
-    return tcfg, sensor_noise(m_tab, source), m_tab
+    return TrackerSetup(sensor_noise(m_tab, source), tcfg, m_tab, source)
 
 
 def run_unlabelled(
     plots: Plots,
     method: str,
-    table: Mapping[str, Any],
-    source: str = "config",
-    association: str | None = None,
+    setup: TrackerSetup,
     all_tracks: bool = False,
     associator: Associator | None = None,
     progress: Progress | None = None,
 ) -> UnlabelledRun:
     """The multi-target tracker of ``seatrack track`` on unlabelled plots: the per-track
     filter of :func:`make_filter` (automatic noise levels), the sensor noise and tracker
-    keys of ``table``; ``rows`` of the result is the number of TRACKS rows. ``associator``
+    keys of ``setup``; ``rows`` of the result is the number of TRACKS rows. ``associator``
     replaces the configured association role (:class:`seatrack.tracking.roles.Associator`);
     ``progress`` is told of the plots done after every scan."""
-    tcfg, sensor, m_tab = tracker_setup(table, source, association)
-    flt, noise = make_filter(method, m_tab, plots, source, tcfg)
-    tracker = Tracker(flt.filter, associator=associator, sensor=sensor, config=tcfg)
+    tcfg = setup.tracker
+    flt, noise = make_filter(method, setup.method_table, plots, setup.source, tcfg)
+    tracker = Tracker(flt.filter, associator=associator, sensor=setup.sensor, config=tcfg)
     run = tracker.run(flt.prepare(plots), all_tracks=all_tracks, progress=progress)
     return UnlabelledRun(plots, run, tracker, int(run.t.size), noise)
 
@@ -384,14 +395,15 @@ def track_unlabelled_file(
     all_tracks: bool = False,
     associator: Associator | None = None,
 ) -> UnlabelledRun:
-    """``seatrack track`` on a file without a ``track`` column: the configuration checked
-    before the plots are read, then :func:`run_unlabelled` (with the estimate and progress
-    of a long run, :mod:`seatrack.progress`); :func:`write_outputs` writes the result."""
-    tracker_setup(table, source, association)  # configuration errors before the plots
+    """``seatrack track`` on a file without a ``track`` column: the configuration parsed
+    (:func:`tracker_setup`) before the plots are read, then :func:`run_unlabelled` (with the
+    estimate and progress of a long run, :mod:`seatrack.progress`); :func:`write_outputs`
+    writes the result."""
+    setup = tracker_setup(table, source, association)  # configuration errors first
     plots = read_unlabelled_plots(path)
     registry.check_range_rate(method, plots.has_range_rate, str(path))
     bar = Progress("seatrack track", len(plots), "plots", len(plots) * UNLABELLED_SECONDS_PER_PLOT)
-    return run_unlabelled(plots, method, table, source, association, all_tracks, associator, bar)
+    return run_unlabelled(plots, method, setup, all_tracks, associator, bar)
 
 
 #: seconds per plot of the multi-target tracker, reading and writing included (ekf, GNN:

@@ -68,7 +68,9 @@ from seatrack.geometry import enu_to_geodetic
 from seatrack.geometry import rotation_to_beam
 from seatrack.geometry import velocity_from_course
 from seatrack.io.ais.reports import AisReports
+from seatrack.io.multitarget import TrackerSetup
 from seatrack.io.multitarget import make_filter
+from seatrack.io.multitarget import run_unlabelled
 from seatrack.io.radar import RadarSetup
 from seatrack.io.radar import parse_radar_config
 from seatrack.tracking import MultiTargetTracker
@@ -114,9 +116,10 @@ class RadarTracks:
 
 def radar_tracks(plots: Plots, setup: RadarSetup, source: str = "radar config") -> RadarTracks:
     """The confirmed and coasting tracks of the multi-target tracker over ``plots`` (the
-    radar at the origin of their plane), configured by ``setup``."""
-    flt, _ = make_filter(setup.site.method, setup.method_table, plots, source, setup.tracker)
-    run = MultiTargetTracker(flt.filter, setup.sensor, setup.tracker).run(flt.prepare(plots))
+    radar at the origin of their plane), configured by ``setup``: the tracker of
+    :func:`~seatrack.io.multitarget.run_unlabelled` with the site's per-track method."""
+    tracking = TrackerSetup(setup.sensor, setup.tracker, setup.method_table, source)
+    run = run_unlabelled(plots, setup.site.method, tracking).run
     labels = np.array([s.label for s in TrackStatus])
     n = run.t.size
     c = run.columns

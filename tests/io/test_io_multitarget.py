@@ -12,6 +12,8 @@ from seatrack.filters.registry import METHODS
 from seatrack.io.multitarget import has_track_column
 from seatrack.io.multitarget import make_filter
 from seatrack.io.multitarget import read_unlabelled_plots
+from seatrack.io.multitarget import run_unlabelled
+from seatrack.io.multitarget import tracker_setup
 from seatrack.io.multitarget import write_plot_labels
 from seatrack.io.multitarget import write_tracks
 from seatrack.io.multitarget import write_unlabelled_plots
@@ -122,6 +124,22 @@ def test_outputs_account_for_every_plot(tmp_path):
             assert by_line[int(r["plot_line"])] == r["track"]
     assert {r["track"] for r in lab} - {"clutter"} == {r["track"] for r in rows}
     assert set(used) <= set(by_line)
+
+
+def test_tracker_setup_parses_once_for_the_run(tmp_path):
+    """The record of :func:`tracker_setup` is what the run uses: the ``--association``
+    override, the sensor keys (flat or ``[sensor]``) and the method keys apart."""
+    table = {"tracker": {"association": "gnn"}, "sensor": {"sigma_range_m": 15.0}, "q": 0.5}
+    setup = tracker_setup(table, "radar.toml", association="jpda")
+    assert setup.tracker.association == "jpda" and setup.source == "radar.toml"
+    assert setup.sensor.sigma_range == 15.0
+    assert setup.method_table == {"sensor": {"sigma_range_m": 15.0}, "q": 0.5}
+    with pytest.raises(InputError, match="--association: must be gnn or jpda"):
+        tracker_setup(table, association="mht")
+    sim = _radar_file(tmp_path / "plots.csv", seed=3)
+    res = run_unlabelled(sim.plots, "ekf", setup)
+    assert res.tracker.config is setup.tracker and res.tracker.sensor is setup.sensor
+    assert res.noise == "given" and res.run.confirmed_ids.size > 0
 
 
 def _radar_file(path, seed):

@@ -149,19 +149,21 @@ def test_a_vessel_rerun_replaces_its_later_states():
     none = np.zeros(0, np.int64)
     fusion.add_estimates(ais.emitted)
     fusion.scan(t0 - 1, none, None, {})  # folds the states in, keeps them all
-    before = dict(fusion.rows[0])
+    key = 219000001
+    before = fusion.states_of(key)
     ais.emitted.clear()
     ais.add(np.array([219000001]), np.array([t0 + 30]), np.array([lat]),
             np.array([lon + 3 * step]), np.array([5.0]), np.array([90.0]))  # fmt: skip
     assert [e.t for _, e in ais.emitted] == [t0 + 30, t0 + 40]  # the re-run
     fusion.add_estimates(ais.emitted)
     fusion.scan(t0 - 1, none, None, {})
-    assert sorted(fusion.rows[0]) == [t0 + 10 * k for k in range(5)]
-    assert list(fusion.recent[0].times) == [t0 + 10 * k for k in range(5)]
-    assert all(fusion.rows[0][t] == before[t] for t in (t0, t0 + 10, t0 + 20))
-    assert fusion.rows[0][t0 + 40] != before[t0 + 40]  # re-run with the report at 30 s
+    assert sorted(fusion.states_of(key)) == [t0 + 10 * k for k in range(5)]
+    assert fusion.report_times(key) == [t0 + 10 * k for k in range(5)]
+    after = fusion.states_of(key)
+    assert all(after[t] == before[t] for t in (t0, t0 + 10, t0 + 20))
+    assert after[t0 + 40] != before[t0 + 40]  # re-run with the report at 30 s
     fusion.scan(t0 + 35, none, None, {})
-    assert sorted(fusion.rows[0]) == [t0 + 30, t0 + 40]  # older states are not needed
+    assert sorted(fusion.states_of(key)) == [t0 + 30, t0 + 40]  # older states are not needed
 
 
 def test_a_failing_scan_consumer_is_counted_and_the_radar_goes_on() -> None:
@@ -228,7 +230,7 @@ def test_a_full_queue_drops_the_oldest_scan_and_keeps_its_ais_states() -> None:
     assert fusion.wait_idle(10.0)
     fusion.close()
     assert seen == [t0 + 1, t0 + 31] and fusion.version == 2 and not fusion.errors
-    assert list(fusion.recent[0].times) == [t0 + 10 * k for k in range(4)]  # dropped scans'
+    assert fusion.report_times(219000001) == [t0 + 10 * k for k in range(4)]  # dropped scans'
 
 
 def test_a_failing_fusion_step_is_counted_and_the_worker_goes_on() -> None:
@@ -251,3 +253,82 @@ def test_a_failing_fusion_step_is_counted_and_the_worker_goes_on() -> None:
     assert fusion.wait_idle(10.0)
     fusion.close()
     assert fusion.errors == {"RuntimeError": 1} and fusion.version == 2 and len(calls) == 3
+
+
+def test_push_times_and_ring_limits_equal_recent_intervals() -> None:
+    """The vessels' report-time rows give the gap limits of
+    :class:`~seatrack.fusion.anomalies.RecentIntervals` fed the same times."""
+    from seatrack.fusion.anomalies import RecentIntervals
+    from seatrack.live.fusion import HISTORY
+    from seatrack.live.fusion import push_times
+    from seatrack.live.fusion import ring_limits
+
+    rng = np.random.default_rng(2)
+    rows, refs = np.full((6, HISTORY), np.nan), [RecentIntervals(HISTORY) for _ in range(6)]
+    last = np.full(6, 1.7e9)
+    for _ in range(40):
+        count = rng.integers(0, 5, 6)
+        new = np.full((6, int(count.max())), np.nan)
+        for r in range(6):
+            for q in range(count[r]):
+                last[r] += float(rng.choice([0.0, rng.exponential(10.0)]))
+                new[r, q] = last[r]
+                refs[r].push(last[r])
+        rows = push_times(rows, new, count)
+        for r in range(6):
+            assert [x for x in rows[r] if x == x] == list(refs[r].times)
+        lim = ring_limits(rows, 2.5, 30.0)
+        assert lim.tolist() == [ref.limit(2.5, 30.0) for ref in refs]
+
+
+def test_fused_store_equals_a_report_by_report_reference() -> None:
+    """Random streams with re-runs (a vessel emitting again from an earlier time) and
+    outliers, folded in at scans: every vessel's report times and state times equal a
+    report-by-report reference (a re-run drops what came after it; a state replaces the
+    one at its time; a scan keeps the last state at or before it and the later ones)."""
+    from types import SimpleNamespace
+
+    from seatrack.live.fusion import HISTORY
+
+    setup, cfg = parse_fusion_config(
+        {"lat_deg": 56.0, "lon_deg": 7.0, "fusion": {"land_mask": False}}
+    )
+    fusion = LiveFusion(setup, cfg)
+    rng = np.random.default_rng(9)
+    keys = [219000001 + k for k in range(8)]
+    vessels = {k: SimpleNamespace(mmsi=k, lat0=56.0 + 0.01 * i, lon0=7.0)
+               for i, k in enumerate(keys)}  # fmt: skip
+    clock = dict.fromkeys(keys, 1.7e9)
+    ref_times: dict[int, list[float]] = {k: [] for k in keys}
+    ref_states: dict[int, set[float]] = {k: set() for k in keys}
+    none = np.zeros(0, np.int64)
+    scan_t = 1.7e9
+    for _ in range(30):
+        emitted = []
+        for _ in range(int(rng.integers(0, 25))):
+            k = keys[int(rng.integers(0, len(keys)))]
+            back = rng.random() < 0.15
+            step = -float(rng.uniform(0, 30)) if back else float(rng.uniform(0, 5))
+            t = round(clock[k] + step, 1)
+            clock[k] = max(clock[k], t)
+            kind = 0 if rng.random() > 0.2 else 2
+            state = np.array([rng.normal(0, 100), rng.normal(0, 100), 3.0, 1.0, 0.0])
+            e = SimpleNamespace(t=t, kind=kind, state=state, std=np.full(5, 2.0), segment=1)
+            emitted.append((vessels[k], e))
+            times, states = ref_times[k], ref_states[k]
+            if times and times[-1] > t:
+                ref_times[k] = times = [x for x in times if x <= t]
+                ref_states[k] = states = {s for s in states if s <= t}
+            times.append(t)
+            del times[:-HISTORY]
+            if kind == 0:
+                states.add(t)
+        fusion.add_estimates(emitted)
+        scan_t += float(rng.uniform(0, 6))
+        fusion.scan(scan_t, none, None, {})
+        for k in keys:
+            before = sorted(s for s in ref_states[k] if s <= scan_t)
+            ref_states[k] = set(before[-1:]) | {s for s in ref_states[k] if s > scan_t}
+            assert fusion.report_times(k) == ref_times[k]
+            assert sorted(fusion.states_of(k)) == sorted(ref_states[k])
+    assert not fusion.errors

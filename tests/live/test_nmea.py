@@ -78,3 +78,36 @@ def test_payload_int_equals_the_per_character_decoding():
             assert payload_int(payload) == ref
     for bad in (b"13u?etPv2;0n:dDPwUM1U1Cb06 9D", b"13u?\x7f", b"1*2,", b"1/2+"):
         assert payload_int(bad) is None
+
+
+def test_duplicates_equal_a_plain_window_on_random_streams():
+    """The bucketed filter answers as a reference that keeps every key's first receipt
+    time and forgets it once older than the window."""
+    rng = np.random.default_rng(5)
+    for window in (0.0, 0.7, 10.0):
+        d = Duplicates(window)
+        first: dict[bytes, float] = {}
+        now = 0.0
+        for _ in range(20_000):
+            now += float(rng.exponential(0.01))
+            key = b"%d" % rng.integers(0, 400)
+            t = first.get(key)
+            expect = t is not None and now - t <= window
+            if not expect:
+                first[key] = now
+            assert d.seen(key, now) == expect
+        assert len(d) >= sum(1 for t in first.values() if now - t <= window)
+
+
+def test_duplicates_hold_nothing_the_garbage_collector_follows():
+    import gc
+
+    d = Duplicates(10.0)
+    for k in range(1_000):
+        d.seen(b"key %d" % k, k * 0.001)
+    reach, level = [], [d]
+    for _ in range(3):  # the object, its attributes, the containers they hold
+        level = gc.get_referents(*level)
+        reach += level
+    keys = [o for o in reach if isinstance(o, dict) and len(o) >= 100]
+    assert sum(map(len, keys)) == 1_000 and not any(gc.is_tracked(o) for o in keys)

@@ -69,7 +69,8 @@ def test_api_tracks_health_page_and_assets():
     assert health["received"] == 3 and health["decoded"] == 2
     assert health["rejected"] == {"not an AIS line": 1} and health["late"] == 0
     assert health["vessels"] == 2 and health["radar_tracks"] == 0
-    assert set(health["latency_ms"]) == {"p50", "p99"} and health["latency_ms"]["p99"] > 0
+    assert set(health["latency_ms"]) == {"p50", "p99", "since_start"}
+    assert health["latency_ms"]["p99"] > 0 and health["latency_ms"]["since_start"]["n"] > 0
     assert "/static/leaflet/leaflet.js" in page and "/static/live.js" in page
     assert "http" not in page.replace("http-equiv", "")  # every asset served locally
     assert assets == [200, 200, 200, 200, 404]

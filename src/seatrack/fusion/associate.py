@@ -47,6 +47,7 @@ from scipy.spatial import cKDTree
 from seatrack.config import Checked
 from seatrack.config import param
 from seatrack.filters.ais.kernel import vessel_starts
+from seatrack.tracking.gating import ball_pairs
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -427,12 +428,8 @@ def gate_candidates(
     tr_z = zc[:, 0, 0] + zc[:, 1, 1]
     tr_a = ac[:, 0, 0] + ac[:, 1, 1]
     radius = np.sqrt(gate * (float(tr_z.max()) + tr_a)) + extra
-    near = cKDTree(zp).query_ball_point(ap, radius, return_sorted=False)
-    counts = np.fromiter((len(x) for x in near), np.int64, ap.shape[0])
-    j = np.repeat(np.arange(ap.shape[0]), counts)
-    i = (np.fromiter((v for x in near for v in x), np.int64, int(counts.sum()))
-         if counts.sum() else np.zeros(0, np.int64))  # fmt: skip
-    return i, j
+    counts, i = ball_pairs(cKDTree(zp), ap, radius)
+    return i, np.repeat(np.arange(ap.shape[0]), counts)
 
 
 def _lookup(keys: IntArray, values: FloatArray, query: IntArray, fill: float) -> FloatArray:

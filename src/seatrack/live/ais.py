@@ -27,6 +27,7 @@ import bisect
 import functools
 import math
 import struct
+from array import array
 from dataclasses import dataclass
 from dataclasses import replace
 
@@ -202,6 +203,9 @@ def _entry_report(mmsi: int, e: bytes) -> AisReport:
 class _Vessel:
     """One vessel: its filter, plane origin, recent reports (for re-runs) and output."""
 
+    __slots__ = ("estimate", "filter", "history", "lat0", "lon0", "mmsi", "name", "report",
+                 "since_state", "t_restored", "times")  # fmt: skip
+
     def __init__(
         self, mmsi: int, lat0: float, lon0: float, par: KernelParams,
         state: FloatArray | None = None,
@@ -210,7 +214,7 @@ class _Vessel:
         self.lat0, self.lon0 = lat0, lon0
         self.filter = VesselFilter(par, state)
         self.history: list[bytes] = []  # _entry
-        self.times: list[float] = []
+        self.times = array("d")  # report times (float64: nothing for the GC to follow)
         self.since_state = 0  # entries after the latest one holding a state
         self.estimate: Estimate | None = None
         self.report: AisReport | None = None

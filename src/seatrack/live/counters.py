@@ -20,29 +20,56 @@ import numpy as np
 __all__ = ["Counters", "Latency"]
 
 
+#: edges (s) of the since-start latency histogram: 1 us to 100 s, 40 bins a decade (each
+#: bin 6 % wide), the last bin open
+_EDGES = np.logspace(-6, 2, 8 * 40 + 1)
+
+
 class Latency:
-    """The last ``size`` latencies (s) in a ring; percentiles in ms."""
+    """The last ``size`` latencies (s) in a ring, and a histogram of every latency since
+    the start; percentiles in ms.
+
+    The ring gives the current figures (the last ``size`` values); the histogram the
+    figures of the whole run, each percentile as the upper edge of its bin (at most 6 %
+    above the exact value), with the exact maximum.
+    """
 
     def __init__(self, size: int = 20_000) -> None:
         self._ring = np.zeros(size)
         self._n = 0
+        self._hist = np.zeros(_EDGES.size + 1, np.int64)
+        self._max = 0.0
 
     def add(self, values: Any) -> None:
         """Record latencies (s)."""
-        v = np.atleast_1d(np.asarray(values, dtype=float))[-self._ring.size :]
+        every = np.atleast_1d(np.asarray(values, dtype=float))
+        if every.size == 0:
+            return
+        self._hist += np.bincount(np.searchsorted(_EDGES, every), minlength=self._hist.size)
+        self._max = max(self._max, float(every.max()))
+        v = every[-self._ring.size :]
         k = self._n % self._ring.size
         first = min(v.size, self._ring.size - k)
         self._ring[k : k + first] = v[:first]
         self._ring[: v.size - first] = v[first:]
-        self._n += v.size
+        self._n += every.size
 
-    def percentiles_ms(self) -> dict[str, float | None]:
-        """``{"p50": ms, "p99": ms}`` of the recorded latencies (None before any)."""
+    def percentiles_ms(self) -> dict[str, Any]:
+        """``{"p50": ms, "p99": ms, "since_start": {"p50", "p99", "max", "n"}}``: the
+        percentiles of the last recorded latencies, and those of every latency since the
+        start (None before any)."""
         if self._n == 0:
-            return {"p50": None, "p99": None}
+            return {"p50": None, "p99": None,
+                    "since_start": {"p50": None, "p99": None, "max": None, "n": 0}}  # fmt: skip
         r = self._ring[: min(self._n, self._ring.size)]
         p50, p99 = np.percentile(r, [50, 99]) * 1e3
-        return {"p50": round(float(p50), 3), "p99": round(float(p99), 3)}
+        cum = np.cumsum(self._hist)
+        upper = np.r_[_EDGES, np.inf]  # upper edge of each bin (s)
+        h50, h99 = (min(upper[np.searchsorted(cum, q * self._n)], self._max) * 1e3
+                    for q in (0.5, 0.99))  # fmt: skip
+        return {"p50": round(float(p50), 3), "p99": round(float(p99), 3),
+                "since_start": {"p50": round(h50, 3), "p99": round(h99, 3),
+                                "max": round(self._max * 1e3, 3), "n": self._n}}  # fmt: skip
 
 
 class Counters:

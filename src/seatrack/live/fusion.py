@@ -40,7 +40,6 @@ from numpy.typing import NDArray
 from seatrack.filters.ais import TrackStates
 from seatrack.filters.ais.tracks import ReportPlanes
 from seatrack.filters.ais.tracks import tracks_from_states
-from seatrack.fusion.anomalies import RecentIntervals
 from seatrack.fusion.associate import AisStates
 from seatrack.fusion.associate import FusionConfig
 from seatrack.fusion.coverage import Coverage
@@ -82,25 +81,48 @@ class _Scan(NamedTuple):
     std_y: FloatArray
 
 
-#: rows converted between tuples and arrays per NumPy call: each call holds the GIL, and
-#: the event loop waits for it (a 20,000-row table at once: 15-25 ms)
-_CHUNK = 2048
+class _Reports(NamedTuple):
+    """AIS filter outputs recorded for the worker, in emission order: vessel keys, times
+    (s), outlier kinds and the raw numbers (n, 13): plane origin lat0, lon0 (deg), state
+    (5), std (5), segment."""
+
+    key: NDArray[np.int64]
+    t: FloatArray
+    kind: NDArray[np.int8]
+    raw: FloatArray
 
 
-def _table(rows: list[tuple[float, ...]], width: int) -> FloatArray:
-    """``np.array(rows)`` (n, width), built ``_CHUNK`` rows per call."""
-    out = np.empty((len(rows), width))
-    for k in range(0, len(rows), _CHUNK):
-        out[k : k + _CHUNK] = rows[k : k + _CHUNK]
-    return out
+def _reports(blocks: list[_Reports]) -> _Reports:
+    """One :class:`_Reports` of several, in order."""
+    if len(blocks) == 1:
+        return blocks[0]
+    if not blocks:
+        return _Reports(np.zeros(0, np.int64), np.zeros(0), np.zeros(0, np.int8),
+                        np.zeros((0, _RAW)))  # fmt: skip
+    return _Reports(*(np.concatenate(c) for c in zip(*blocks, strict=True)))
 
 
-def _rows(a: FloatArray) -> list[tuple[float, ...]]:
-    """The rows of ``a`` as tuples of floats, ``_CHUNK`` rows per call."""
-    out: list[tuple[float, ...]] = []
-    for k in range(0, a.shape[0], _CHUNK):
-        out.extend(map(tuple, a[k : k + _CHUNK].tolist()))
-    return out
+def push_times(ring: FloatArray, new: FloatArray, count: NDArray[np.int64]) -> FloatArray:
+    """Rows of report times (right-aligned, NaN before the first) with ``count[r]`` more
+    times each (``new[r, :count[r]]``, increasing, after the row's), keeping the last
+    ``ring.shape[1]``."""
+    width = ring.shape[1]
+    src = np.concatenate([ring, new], axis=1)
+    idx = np.arange(width)[None, :] + count[:, None]
+    return np.take_along_axis(src, idx, axis=1)
+
+
+def ring_limits(ring: FloatArray, gap_factor: float, min_gap_s: float) -> FloatArray:
+    """Per row of report times (:func:`push_times`): ``max(gap_factor * median interval,
+    min_gap_s)``, ``min_gap_s`` with fewer than two times -- the numbers of
+    :meth:`~seatrack.fusion.anomalies.RecentIntervals.limit` for the same times."""
+    d = np.sort(np.diff(ring, axis=1), axis=1)  # NaN (missing) last
+    m = np.count_nonzero(np.isfinite(d), axis=1)
+    lo = np.take_along_axis(d, np.maximum((m - 1) // 2, 0)[:, None], axis=1)[:, 0]
+    hi = np.take_along_axis(d, np.maximum(m // 2, 0)[:, None], axis=1)[:, 0]
+    with np.errstate(invalid="ignore"):
+        lim = np.maximum(gap_factor * (0.5 * (lo + hi)), min_gap_s)
+    return np.where(m > 0, lim, min_gap_s)
 
 
 class LiveFusion:
@@ -125,20 +147,23 @@ class LiveFusion:
         self.coverage = Coverage.of(setup.site, self.config.land_mask, self.config.land_cell)
         self.queue_size = queue_size
         # recorded by the event loop, taken by the worker
-        self._pending: list[tuple[int, float, int, tuple[float, ...]]] = []
-        self._queue: deque[tuple[list, _Scan]] = deque()
+        self._pending: list[_Reports] = []
+        self._queue: deque[tuple[list[_Reports], _Scan]] = deque()
         self._cond = threading.Condition()
         self._busy = False
         self._closing = False
         self._thread: threading.Thread | None = None
-        # the worker's state
+        # the worker's state: per vessel (id = order of first report) its key and its last
+        # HISTORY report times (rows right-aligned, NaN before the first) with their gap
+        # limit; the states in the radar's plane, sorted by (vessel, time)
         self.index: dict[int, int] = {}  # vessel key -> vessel id of the fusion
         self.mmsi: list[int] = []  # vessel id -> key (the MMSI)
-        self.rows: list[dict[float, tuple[float, ...]]] = []  # per vessel: time -> state
-        self.recent: list[RecentIntervals] = []  # per vessel: report times, gap limit
-        self.limit: list[float] = []  # per vessel: gap limit (s)
-        self._stale: set[int] = set()  # vessels whose gap limit needs recomputing
-        self._raw: dict[tuple[int, float], None] = {}  # (vessel, time) of raw states
+        self._sorted_keys = (np.zeros(0, np.int64), np.zeros(0, np.int64))  # keys, their ids
+        self._ring = np.full((0, HISTORY), np.nan)
+        self._limit = np.zeros(0)
+        self._sv = np.zeros(0, np.int64)
+        self._st = np.zeros(0)
+        self._sa = np.zeros((0, _PLANE))
         self.fusion = Fusion(self.coverage, self._states(), self.config)
         # results, replaced whole by the worker (read by the event loop)
         self.tracks: dict[int, FusedTrack] = {}  # radar track id -> result at the last scan
@@ -154,15 +179,24 @@ class LiveFusion:
     # ---- event loop side ------------------------------------------------------------------
     def add_estimates(self, emitted: list) -> None:
         """Record ``(vessel, Estimate)`` pairs of :attr:`LiveAis.emitted`, in emission
-        order, for the next scan (plain numbers: the objects may change later)."""
-        new = [
-            (v.mmsi, e.t, e.kind,
-             (v.lat0, v.lon0, *e.state.tolist(), *e.std.tolist(), e.segment))
-            for v, e in emitted
-        ]  # fmt: skip
-        if new:
-            with self._cond:
-                self._pending.extend(new)
+        order, for the next scan (copied to arrays: the objects may change later)."""
+        n = len(emitted)
+        if not n:
+            return
+        raw = np.empty((n, _RAW))
+        raw[:, 0] = np.fromiter((v.lat0 for v, _ in emitted), float, n)
+        raw[:, 1] = np.fromiter((v.lon0 for v, _ in emitted), float, n)
+        raw[:, 2:7] = np.array([e.state for _, e in emitted])
+        raw[:, 7:12] = np.array([e.std for _, e in emitted])
+        raw[:, 12] = np.fromiter((e.segment for _, e in emitted), float, n)
+        block = _Reports(
+            np.fromiter((v.mmsi for v, _ in emitted), np.int64, n),
+            np.fromiter((e.t for _, e in emitted), float, n),
+            np.fromiter((e.kind for _, e in emitted), np.int8, n),
+            raw,
+        )
+        with self._cond:
+            self._pending.append(block)
 
     def scan(self, t: float, ids: NDArray[np.int64], status: Any, cols: dict[str, Any]) -> None:
         """Hand over the radar tracks reported at the scan ``t`` (a
@@ -259,86 +293,163 @@ class LiveFusion:
                 self._busy = False
                 self._cond.notify_all()
 
-    def _apply(self, recorded: list) -> None:
+    def _apply(self, recorded: list[_Reports]) -> None:
         """Fold recorded estimates in. A vessel re-run from an earlier report emits again
-        from that report on: its states after that time are dropped (the re-run emits
-        them again), one at the same time replaced. Outliers keep their report time
-        (for the gap limit) but no state, as in the batch fusion."""
-        for key, tk, kind, raw in recorded:
-            j = self.index.get(key)
-            if j is None:
-                j = self.index[key] = len(self.mmsi)
-                self.mmsi.append(key)
-                self.rows.append({})
-                self.recent.append(RecentIntervals(HISTORY))
-                self.limit.append(self.config.min_gap)
-            rows, rec = self.rows[j], self.recent[j]
-            if rec.times and rec.times[-1] > tk:  # a re-run's first report: drop later ones
-                for old in [s for s in rows if s > tk]:
-                    del rows[old]
-                rec.rewind(tk)
-            self._stale.add(j)
-            rec.push(tk)
-            if kind == 0:
-                rows[tk] = raw
-                self._raw[j, tk] = None
-                if len(rows) > HISTORY:  # bounded without scans: the oldest (in time order)
-                    del rows[next(iter(rows))]
-
-    def _limits(self) -> FloatArray:
-        """Per vessel the longest silence before it is no longer predicted (s), of its
-        report times seen (recomputed for the vessels with new reports)."""
-        cfg = self.config
-        for j in self._stale:
-            self.limit[j] = self.recent[j].limit(cfg.gap_factor, cfg.min_gap)
-        self._stale.clear()
-        return np.array(self.limit, dtype=float)
-
-    def _convert(self) -> None:
-        """The raw states recorded since the last scan, in the radar's plane (each state
-        converted once); those without a position and velocity are dropped (as in the
-        batch fusion)."""
-        rows = self.rows
-        new = [(rows[j], s) for j, s in self._raw if len(rows[j].get(s, ())) == _RAW]
-        self._raw.clear()
-        if not new:
+        from that report on: its report times and states after that time are dropped (the
+        re-run emits them again), a state at the same time replaced. Outliers keep their
+        report time (for the gap limit) but no state, as in the batch fusion. Vessels
+        whose times only grow are folded in whole arrays; a re-run vessel report by
+        report (:meth:`_rerun`)."""
+        r = _reports(recorded)
+        if r.t.size == 0:
             return
-        a = _table([r[s] for r, s in new], _RAW)
-        n = len(new)
+        vid = self._vessel_ids(r.key)
+        order = np.argsort(vid, kind="stable")  # by vessel, in emission order
+        js, ts = vid[order], r.t[order]
+        first = np.r_[True, js[1:] != js[:-1]]
+        prev = np.where(first, self._ring[js, -1], np.r_[np.nan, ts[:-1]])
+        rerun = np.unique(js[ts < prev])  # a time before the vessel's previous one
+        regular = ~np.isin(js, rerun)
+        self._push(js[regular], ts[regular])
+        new = order[regular & (r.kind[order] == 0)]
+        keep = np.ones(self._sv.size, bool)
+        if rerun.size:
+            extra = [self._rerun(v, order[js == v], r, keep) for v in rerun.tolist()]
+            new = np.concatenate([new, *extra])
+        touched = np.unique(js)
+        cfg = self.config
+        self._limit[touched] = ring_limits(self._ring[touched], cfg.gap_factor, cfg.min_gap)
+        self._merge(keep, vid[new], r.t[new], r.raw[new])
+
+    def _vessel_ids(self, keys: NDArray[np.int64]) -> NDArray[np.int64]:
+        """The fusion's vessel id of each key (new keys get the next ids, in key order)."""
+        uk, inv = np.unique(keys, return_inverse=True)
+        sk, sid = self._sorted_keys
+        pos = np.minimum(np.searchsorted(sk, uk), max(sk.size - 1, 0))
+        found = (sk[pos] == uk) if sk.size else np.zeros(uk.size, bool)
+        ids = np.where(found, sid[pos] if sk.size else 0, -1)
+        fresh = uk[~found]
+        if fresh.size:
+            first = len(self.mmsi)
+            ids[~found] = first + np.arange(fresh.size)
+            for j, k in enumerate(fresh.tolist(), first):
+                self.index[k] = j
+                self.mmsi.append(k)
+            sk, sid = np.r_[sk, fresh], np.r_[sid, ids[~found]]
+            order = np.argsort(sk, kind="stable")
+            self._sorted_keys = (sk[order], sid[order])
+            grow = fresh.size
+            self._ring = np.concatenate([self._ring, np.full((grow, HISTORY), np.nan)])
+            self._limit = np.r_[self._limit, np.full(grow, self.config.min_gap)]
+        return ids[inv.reshape(-1)]
+
+    def _push(self, js: NDArray[np.int64], ts: FloatArray) -> None:
+        """Append report times, grouped by vessel in time order, to the vessels' rows."""
+        if js.size == 0:
+            return
+        start = np.flatnonzero(np.r_[True, js[1:] != js[:-1]])
+        count = np.diff(np.r_[start, js.size])
+        q = np.arange(js.size) - np.repeat(start, count)  # position within its vessel
+        new = np.full((start.size, int(count.max())), np.nan)
+        new[np.repeat(np.arange(start.size), count), q] = ts
+        v = js[start]
+        self._ring[v] = push_times(self._ring[v], new, count)
+
+    def _rerun(self, v: int, rows: NDArray[np.int64], r: _Reports,
+               keep: NDArray[np.bool_]) -> NDArray[np.int64]:  # fmt: skip
+        """Vessel ``v``'s reports ``rows`` (emission order), one by one: its report times
+        rewound and pushed, its stored states dropped (``keep``) or replaced; returns the
+        rows whose states it keeps."""
+        times = [x for x in self._ring[v].tolist() if x == x]
+        mine = np.flatnonzero(self._sv == v)
+        old = dict(zip(self._st[mine].tolist(), mine.tolist(), strict=True))  # time -> row
+        new: dict[float, int] = {}  # time -> report row
+        for i, tk, kind in zip(rows.tolist(), r.t[rows].tolist(), r.kind[rows].tolist(),
+                               strict=True):  # fmt: skip
+            if times and times[-1] > tk:
+                times = [x for x in times if x <= tk]
+                old = {s: k for s, k in old.items() if s <= tk}
+                new = {s: k for s, k in new.items() if s <= tk}
+            times.append(tk)
+            if kind == 0:
+                old.pop(tk, None)
+                new[tk] = i
+        times = times[-HISTORY:]
+        self._ring[v] = np.nan
+        self._ring[v, HISTORY - len(times) :] = times
+        keep[mine] = False
+        keep[list(old.values())] = True
+        return np.array(list(new.values()), np.int64)
+
+    def _merge(self, keep: NDArray[np.bool_], v: NDArray[np.int64], t: FloatArray,
+               raw: FloatArray) -> None:  # fmt: skip
+        """The stored states ``keep`` and the raw states of vessels ``v`` at ``t`` (brought
+        to the radar's plane), sorted by (vessel, time); a new state replaces a stored one
+        at the same time, and the later of two new ones wins; states without a position
+        and velocity are dropped (as in the batch fusion); at most ``HISTORY`` per vessel
+        (the latest)."""
+        plane, ok = self._plane(raw)
+        sv = np.r_[self._sv[keep], v]
+        st = np.r_[self._st[keep], t]
+        sa = np.concatenate([self._sa[keep], plane])
+        good = np.r_[np.ones(int(keep.sum()), bool), ok]
+        order = np.lexsort((np.arange(sv.size), st, sv))
+        sv, st = sv[order], st[order]
+        last = np.r_[(sv[1:] != sv[:-1]) | (st[1:] != st[:-1]), True]  # of equal (v, t)
+        pick = order[last & good[order]]
+        sv, st = np.r_[self._sv[keep], v][pick], np.r_[self._st[keep], t][pick]
+        # at most HISTORY per vessel: rank from each vessel's last state
+        end = np.r_[np.flatnonzero(sv[1:] != sv[:-1]), sv.size - 1] if sv.size else sv
+        size = np.diff(np.r_[-1, end])
+        rank = np.repeat(end, size) - np.arange(sv.size)
+        cap = rank < HISTORY
+        self._sv, self._st, self._sa = sv[cap], st[cap], sa[pick][cap]
+
+    def _plane(self, raw: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
+        """Raw filter outputs (n, 13) as states in the radar's plane (n, 12): position,
+        velocity, position and velocity covariances; and which have a position and
+        velocity."""
+        n = raw.shape[0]
+        if n == 0:
+            return np.zeros((0, _PLANE)), np.zeros(0, bool)
         kind = np.zeros(n, np.int8)
-        st = TrackStates(a[:, 2:7], a[:, 7:12], kind > 0, kind, a[:, 12].astype(np.int64),
+        st = TrackStates(raw[:, 2:7], raw[:, 7:12], kind > 0, kind, raw[:, 12].astype(np.int64),
                          np.full(n, np.nan), np.zeros(n))  # fmt: skip
-        tr = tracks_from_states(ReportPlanes(n, np.arange(n), a[:, 0], a[:, 1]), st)
+        tr = tracks_from_states(ReportPlanes(n, np.arange(n), raw[:, 0], raw[:, 1]), st)
         cols = {f: getattr(tr, f) for f in STATE_FIELDS}
         ok = np.isfinite(cols["lat"]) & np.isfinite(cols["speed"]) & np.isfinite(cols["course"])
         s = ais_states(self.coverage, np.arange(n), np.zeros(n), cols, np.zeros(n))
-        flat = _rows(np.concatenate([s.pos, s.vel, s.pos_cov.reshape(n, 4),
-                                     s.vel_cov.reshape(n, 4)], axis=1))  # fmt: skip
-        for (r, t), v, good in zip(new, flat, ok.tolist(), strict=True):
-            if good:
-                r[t] = tuple(v)
-            else:
-                del r[t]
+        plane = np.concatenate([s.pos, s.vel, s.pos_cov.reshape(n, 4), s.vel_cov.reshape(n, 4)],
+                               axis=1)  # fmt: skip
+        return plane, ok
 
     def _states(self) -> AisStates:
-        """The stored states as :class:`AisStates` (by vessel, then time: each vessel's
-        states are kept in time order)."""
-        self._convert()
-        vessel = np.fromiter((j for j, r in enumerate(self.rows) for _ in r), np.int64)
-        t = np.fromiter((s for r in self.rows for s in r), float, vessel.size)
-        a = _table([v for r in self.rows for v in r.values()], _PLANE)
-        n = t.size
-        return AisStates(vessel, t, a[:, 0:2], a[:, 2:4], a[:, 4:8].reshape(n, 2, 2),
-                         a[:, 8:12].reshape(n, 2, 2), self._limits())  # fmt: skip
+        """The stored states as :class:`AisStates` (by vessel, then time)."""
+        a, n = self._sa, self._st.size
+        return AisStates(self._sv, self._st, a[:, 0:2], a[:, 2:4], a[:, 4:8].reshape(n, 2, 2),
+                         a[:, 8:12].reshape(n, 2, 2), self._limit.copy())  # fmt: skip
 
     def _prune(self, t: float) -> None:
         """Keep per vessel the last state at or before ``t`` and the later ones (scans
         come in time order)."""
-        for r in self.rows:
-            if len(r) > 1:
-                before = [s for s in r if s <= t]
-                for s in before[:-1]:
-                    del r[s]
+        sv, le = self._sv, self._st <= t
+        last_le = le & np.r_[(sv[1:] != sv[:-1]) | ~le[1:], True]
+        keep = ~le | last_le
+        self._sv, self._st, self._sa = sv[keep], self._st[keep], self._sa[keep]
+
+    def states_of(self, key: int) -> dict[float, tuple[float, ...]]:
+        """The stored states of a vessel key by time (12 numbers in the radar's plane:
+        position, velocity, position and velocity covariances)."""
+        j = self.index.get(key)
+        rows = np.flatnonzero(self._sv == j) if j is not None else np.zeros(0, np.int64)
+        return {t: tuple(a) for t, a in zip(self._st[rows].tolist(), self._sa[rows].tolist(),
+                                            strict=True)}  # fmt: skip
+
+    def report_times(self, key: int) -> list[float]:
+        """The report times of a vessel key the gap limit is taken of (the last
+        ``HISTORY``)."""
+        j = self.index.get(key)
+        return [] if j is None else [x for x in self._ring[j].tolist() if x == x]
 
     def _step(self, item: _Scan) -> None:
         """One fusion step; the results replace :attr:`tracks` and :attr:`not_seen`."""

@@ -43,7 +43,7 @@ from seatrack.live.sources import Source
 from seatrack.live.sources import open_udp
 from seatrack.live.sources import run_source
 
-__all__ = ["LiveOptions", "LiveProcess"]
+__all__ = ["LiveOptions", "LiveProcess", "freeze_startup_objects"]
 
 
 @dataclass
@@ -345,6 +345,24 @@ class LiveProcess:
                 await self.commit()
             self.store.close()
             self.store = None
+
+
+def freeze_startup_objects() -> int:
+    """Collect once, then move every object alive now (modules, configuration, a picture
+    restored from the store) out of the garbage collector's sight (:func:`gc.freeze`);
+    returns how many were frozen.
+
+    A long-running process calls it once it is up: a full collection then visits only
+    the objects made since, which cuts the pauses that stall the event loop (with 10,000
+    vessels at 20,000 msg/s, about 28 full collections of 135 ms in 30 s before, 46 of
+    18 ms on average after, ``benchmarks/live.py``). Frozen objects are never collected:
+    call it when what exists is what the process keeps.
+    """
+    import gc
+
+    gc.collect()
+    gc.freeze()
+    return gc.get_freeze_count()
 
 
 def _identities(opts: LiveOptions) -> Any:

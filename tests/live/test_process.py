@@ -183,3 +183,18 @@ def test_udp_picture_equals_batch_causal_tracker(tmp_path):
         np.testing.assert_allclose([got.lat[k], got.lon[k]], want[m][:2], rtol=0, atol=1e-8)
         np.testing.assert_allclose(got.speed[k], want[m][2], rtol=0, atol=1e-7)
         np.testing.assert_allclose(got.course[k], want[m][3], rtol=0, atol=1e-7)
+
+
+def test_freeze_startup_objects_moves_the_live_objects_out_of_the_collector() -> None:
+    import gc
+
+    from seatrack.live.process import freeze_startup_objects
+
+    try:
+        marker = [object()]  # a container alive now
+        frozen = freeze_startup_objects()
+        assert frozen == gc.get_freeze_count() > 0
+        assert not any(o is marker for o in gc.get_objects())  # frozen: not scanned
+    finally:
+        gc.unfreeze()
+    assert any(o is marker for o in gc.get_objects())

@@ -49,7 +49,15 @@ __all__ = [
     "reporting_gaps",
     "gap_limits",
     "RecentIntervals",
+    "DEFAULT_GAP_FACTOR",
+    "DEFAULT_MIN_GAP_S",
 ]
+
+#: default gap limit keys (``[fusion]`` ``gap_factor`` and ``min_gap_s``): a gap is a
+#: silence longer than this many of the vessel's median reporting intervals, and at least
+#: ``DEFAULT_MIN_GAP_S`` (s)
+DEFAULT_GAP_FACTOR = 2.5
+DEFAULT_MIN_GAP_S = 30.0
 
 
 @dataclass(frozen=True)

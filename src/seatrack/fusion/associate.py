@@ -47,6 +47,8 @@ from scipy.spatial import cKDTree
 from seatrack.config import Checked
 from seatrack.config import param
 from seatrack.filters.ais.kernel import vessel_starts
+from seatrack.fusion.anomalies import DEFAULT_GAP_FACTOR
+from seatrack.fusion.anomalies import DEFAULT_MIN_GAP_S
 from seatrack.tracking.gating import ball_pairs
 
 FloatArray = NDArray[np.float64]
@@ -135,11 +137,12 @@ class FusionConfig(Checked):
         min=0.0, max=1.0,
     )  # fmt: skip
     gap_factor: float = param(
-        2.5, doc="a gap: silent longer than this many own median reporting intervals",
+        DEFAULT_GAP_FACTOR,
+        doc="a gap: silent longer than this many own median reporting intervals",
         min=1.0, max=1000.0,
     )  # fmt: skip
     min_gap: float = param(
-        30.0, key="min_gap_s", unit="s", doc="shortest silence called a gap", min=0.0,
+        DEFAULT_MIN_GAP_S, key="min_gap_s", unit="s", doc="shortest silence called a gap", min=0.0,
         max=1e6,
     )  # fmt: skip
     land_mask: bool = param(True, doc="land from the bundled coast shadows the radar")

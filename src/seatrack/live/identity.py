@@ -38,6 +38,8 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import NDArray
 
+from seatrack.fusion.anomalies import DEFAULT_GAP_FACTOR
+from seatrack.fusion.anomalies import DEFAULT_MIN_GAP_S
 from seatrack.fusion.anomalies import RecentIntervals
 from seatrack.fusion.anomalies import SplitConfig
 from seatrack.fusion.anomalies import Trajectories
@@ -105,8 +107,9 @@ class LiveIdentities:
     record : :meth:`record` from the start.
     """
 
-    def __init__(self, origin_deg: tuple[float, float] | None = None, gap_factor: float = 2.5,
-                 min_gap_s: float = 30.0, config: SplitConfig | None = None,
+    def __init__(self, origin_deg: tuple[float, float] | None = None,
+                 gap_factor: float = DEFAULT_GAP_FACTOR, min_gap_s: float = DEFAULT_MIN_GAP_S,
+                 config: SplitConfig | None = None,
                  record: bool = False) -> None:  # fmt: skip
         self.origin = origin_deg
         self.gap_factor, self.min_gap = gap_factor, min_gap_s

@@ -185,16 +185,20 @@ def test_udp_picture_equals_batch_causal_tracker(tmp_path):
         np.testing.assert_allclose(got.course[k], want[m][3], rtol=0, atol=1e-7)
 
 
-def test_freeze_startup_objects_moves_the_live_objects_out_of_the_collector() -> None:
+def test_tune_garbage_collector_freezes_the_live_objects_and_sets_thresholds() -> None:
     import gc
 
-    from seatrack.live.process import freeze_startup_objects
+    from seatrack.live.process import GC_THRESHOLDS
+    from seatrack.live.process import tune_garbage_collector
 
+    thresholds = gc.get_threshold()
     try:
         marker = [object()]  # a container alive now
-        frozen = freeze_startup_objects()
+        frozen = tune_garbage_collector()
         assert frozen == gc.get_freeze_count() > 0
         assert not any(o is marker for o in gc.get_objects())  # frozen: not scanned
+        assert gc.get_threshold() == GC_THRESHOLDS
     finally:
         gc.unfreeze()
+        gc.set_threshold(*thresholds)
     assert any(o is marker for o in gc.get_objects())

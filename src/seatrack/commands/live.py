@@ -56,9 +56,9 @@ async def run_live(opts: Any, echo: Any = print, on_start: Any = None) -> bool:
 
             services.append(await start_web(proc, *opts.http))
             echo(f"map at http://{opts.http[0]}:{proc.http_port}/")
-        from seatrack.live.process import freeze_startup_objects
+        from seatrack.live.process import tune_garbage_collector
 
-        freeze_startup_objects()
+        tune_garbage_collector()
         if on_start is not None:
             on_start(proc)
         only_files = all(s.kind == "file" for s in [*opts.ais, *opts.plots])

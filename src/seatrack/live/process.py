@@ -44,7 +44,7 @@ from seatrack.live.sources import Source
 from seatrack.live.sources import open_udp
 from seatrack.live.sources import run_source
 
-__all__ = ["LiveOptions", "LiveProcess", "freeze_startup_objects"]
+__all__ = ["GC_THRESHOLDS", "LiveOptions", "LiveProcess", "tune_garbage_collector"]
 
 
 @dataclass
@@ -364,21 +364,31 @@ def _collector_paused() -> Iterator[None]:
             gc.enable()
 
 
-def freeze_startup_objects() -> int:
-    """Move every object alive now (modules, configuration, a picture restored from the
-    store) out of the garbage collector's sight (:func:`gc.freeze`); returns how many
+#: the collector's thresholds for a live process (:func:`tune_garbage_collector`): a young
+#: collection every 10,000 allocations net, a middle one every 50 young ones
+GC_THRESHOLDS = (10_000, 50, 10)
+
+
+def tune_garbage_collector() -> int:
+    """Set the garbage collector for a long-running live process; returns how many
     objects are frozen.
 
-    A long-running process calls it once it is up: a full collection then visits only
-    the objects made since, which cuts the pauses that stall the event loop (with 10,000
-    vessels at 20,000 msg/s, about 28 full collections of 135 ms in 30 s before, 46 of
-    18 ms on average after, ``benchmarks/live.py``). Frozen objects are never collected:
-    call it when what exists is what the process keeps. No collection before (it would
+    Every object alive now (modules, configuration, a picture restored from the store) is
+    moved out of the collector's sight (:func:`gc.freeze`), so that no later collection
+    walks it again; and the thresholds become :data:`GC_THRESHOLDS`, so that the objects
+    of a report (its estimate, its store row), which live until the vessel's next report
+    or the next scan, die in the young generations instead of piling up in the old one,
+    whose full collections stall the event loop. Measured with ``benchmarks/live.py``
+    (10,000 vessels at 20,000 msg/s, 30 s, ``gc.callbacks``): 28 full collections of
+    135 ms each without either; with the freeze alone 9-46 full collections of 18-49 ms
+    median (latency max 93-131 ms); with both, none and one middle collection of 62-74 ms
+    (latency max 38-42 ms). Called once the process is up; no collection before (it would
     delay a restarted process's first answer by 0.1-0.2 s with 10,000 vessels restored).
     """
     import gc
 
     gc.freeze()
+    gc.set_threshold(*GC_THRESHOLDS)
     return gc.get_freeze_count()
 
 

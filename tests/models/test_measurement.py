@@ -174,3 +174,14 @@ def test_near_sensor_compares_ranges_with_the_position_spread():
     ranges = np.array([limit - 1, limit + 1, 1e3, 1e3])
     got = near_sensor(np.zeros((4, 4)) + [1e4, 0, 0, 0], sharp, ranges, sensor, 2, 20.0**2)
     assert got.tolist() == [True, False, False, False]
+
+
+def test_range_rate_is_nan_at_zero_range_without_a_warning():
+    import warnings
+
+    from seatrack.models.measurement import range_rate
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        rr = range_rate(np.array([[0.0, 0.0, 0.0], [3.0, 4.0, 0.0]]), np.array([[1.0, 0, 0]] * 2))
+    assert np.isnan(rr[0]) and rr[1] == pytest.approx(0.6)

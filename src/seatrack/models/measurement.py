@@ -92,11 +92,13 @@ def range_bearing_elevation_jacobian(d: ArrayLike) -> FloatArray:
 
 
 def range_rate(d: ArrayLike, dv: ArrayLike) -> Any:
-    """Range rate ``d . dv / |d|`` (m/s; positive = opening) for relative position/velocity."""
+    """Range rate ``d . dv / |d|`` (m/s; positive = opening) for relative position/velocity;
+    NaN at zero range (undefined there)."""
     dd = np.asarray(d, dtype=float)
     vv = np.asarray(dv, dtype=float)
     r = np.linalg.norm(dd, axis=-1)
-    return np.einsum("...i,...i->...", dd, vv) / r
+    with np.errstate(invalid="ignore"):  # 0 / 0 at zero range: NaN
+        return np.einsum("...i,...i->...", dd, vv) / r
 
 
 def range_rate_jacobian(d: ArrayLike, dv: ArrayLike) -> tuple[FloatArray, FloatArray]:

@@ -28,3 +28,18 @@ def test_options_are_checked_by_their_command_line_names():
                       ({"skip": 10**6}, "--skip")]:  # fmt: skip
         with pytest.raises(InputError, match=name):
             evaluation_options(sc, EvaluationOptions(**bad))
+
+
+def test_multitarget_options_are_checked_by_the_api_and_the_command():
+    """A ``[multitarget]`` scenario: bad runs or an unknown method are the same user error
+    from :func:`seatrack.evaluate` and from ``seatrack evaluate`` (exit 2), before any run
+    (an IndexError and an internal error before)."""
+    from tests.cli_inprocess import seatrack as cli
+
+    import seatrack
+
+    for kw, name in (({"runs": 0}, "--runs"), ({"methods": ["foo"]}, "--methods")):
+        with pytest.raises(InputError, match=name):
+            seatrack.evaluate("coastal_multitarget", **kw)
+    res = cli("evaluate", "coastal_multitarget", "--methods", "foo", "--runs", "1")
+    assert res.returncode == 2 and "--methods: unknown method 'foo'" in res.stderr

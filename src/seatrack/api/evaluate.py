@@ -21,6 +21,7 @@ __all__ = [
     "evaluate",
     "Evaluation",
     "EvaluationOptions",
+    "multitarget_options",
     "run_evaluation",
     "method_names",
     "config_error",
@@ -147,6 +148,14 @@ def evaluation_options(sc: Any, options: EvaluationOptions) -> tuple[int, int, A
     return n, s, sens
 
 
+def multitarget_options(sc: Any, options: EvaluationOptions) -> tuple[int, int, list[str] | None]:
+    """The number of runs, the seed and the per-track methods (None: the default) of an
+    evaluation of a ``[multitarget]`` scenario, every option checked as
+    :func:`evaluation_options` and :func:`method_names` check them."""
+    n, s, _ = evaluation_options(sc, options)
+    return n, s, None if options.methods is None else method_names(options.methods)
+
+
 def run_evaluation(
     sc: Any,
     options: EvaluationOptions,
@@ -229,12 +238,12 @@ def evaluate(
 
     sc = load(scenario)
     if sc.multitarget is None:
-        options = EvaluationOptions(methods, runs, seed, sensor, skip, processes)
-        return run_evaluation(sc, options).frame()
+        return run_evaluation(sc, EvaluationOptions(methods, runs, seed, sensor, skip,
+                                                    processes)).frame()  # fmt: skip
     from seatrack.evaluate.multitarget import evaluate_multitarget
 
-    mt = None if methods is None else method_names(methods)
-    n_mt, s_mt = sc.runs if runs is None else runs, sc.seed if seed is None else seed
+    options = EvaluationOptions(methods, runs, seed, sensor, skip, processes)
+    n_mt, s_mt, mt = multitarget_options(sc, options)
     with tempfile.TemporaryDirectory(prefix="seatrack-") as folder:
         out = Path(folder) / "evaluate.csv"
         evaluate_multitarget(sc, n_mt, s_mt, mt, sensor, out)

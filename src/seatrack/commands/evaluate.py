@@ -53,7 +53,6 @@ def register(app: typer.Typer) -> None:
         --processes.
         """
         from seatrack.api.evaluate import EvaluationOptions
-        from seatrack.api.evaluate import evaluation_options
         from seatrack.api.evaluate import run_evaluation
         from seatrack.api.options import prepare_outputs
         from seatrack.api.simulate import load
@@ -63,11 +62,11 @@ def register(app: typer.Typer) -> None:
         prepare_outputs({"--csv": csv_out}, {"--plots": plots}, inputs=[source])
         sc = load(source)
         options = EvaluationOptions(methods, runs, seed, sensor, skip, processes)
-        n, s, _ = evaluation_options(sc, options)
         if sc.multitarget is not None:  # unlabelled plots: the multi-target tracker
+            from seatrack.api.evaluate import multitarget_options
             from seatrack.evaluate.multitarget import evaluate_multitarget
 
-            mt = None if methods is None else [m.strip() for m in methods.split(",") if m.strip()]
+            n, s, mt = multitarget_options(sc, options)
             typer.echo(
                 evaluate_multitarget(sc, n, s, mt, sensor, csv_out, plots, progress=progress)
             )

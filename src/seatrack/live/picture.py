@@ -176,10 +176,11 @@ class Picture:
         changed = self.not_seen ^ not_seen
         self.not_seen = set(not_seen)
         for m in changed:
-            feat = self.features.get(ais_id(m))
+            fid = ais_id(m)
+            feat = self.features.get(fid)
             if feat is not None:
                 feat["properties"]["not_seen"] = m in not_seen
-                self.dirty.add(f"ais:{m}")
+                self.dirty.add(fid)
 
     def collection(self) -> dict[str, Any]:
         """The whole picture as a GeoJSON FeatureCollection."""

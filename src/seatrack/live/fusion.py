@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seatrack.filters.ais import TrackStates
+from seatrack.filters.ais.kernel import vessel_starts
 from seatrack.filters.ais.tracks import ReportPlanes
 from seatrack.filters.ais.tracks import tracks_from_states
 from seatrack.fusion.associate import AisStates
@@ -156,7 +157,6 @@ class LiveFusion:
         # the worker's state: per vessel (id = order of first report) its key and its last
         # HISTORY report times (rows right-aligned, NaN before the first) with their gap
         # limit; the states in the radar's plane, sorted by (vessel, time)
-        self.index: dict[int, int] = {}  # vessel key -> vessel id of the fusion
         self.mmsi: list[int] = []  # vessel id -> key (the MMSI)
         self._sorted_keys = (np.zeros(0, np.int64), np.zeros(0, np.int64))  # keys, their ids
         self._ring = np.full((0, HISTORY), np.nan)
@@ -330,11 +330,8 @@ class LiveFusion:
         ids = np.where(found, sid[pos] if sk.size else 0, -1)
         fresh = uk[~found]
         if fresh.size:
-            first = len(self.mmsi)
-            ids[~found] = first + np.arange(fresh.size)
-            for j, k in enumerate(fresh.tolist(), first):
-                self.index[k] = j
-                self.mmsi.append(k)
+            ids[~found] = len(self.mmsi) + np.arange(fresh.size)
+            self.mmsi.extend(fresh.tolist())
             sk, sid = np.r_[sk, fresh], np.r_[sid, ids[~found]]
             order = np.argsort(sk, kind="stable")
             self._sorted_keys = (sk[order], sid[order])
@@ -347,8 +344,8 @@ class LiveFusion:
         """Append report times, grouped by vessel in time order, to the vessels' rows."""
         if js.size == 0:
             return
-        start = np.flatnonzero(np.r_[True, js[1:] != js[:-1]])
-        count = np.diff(np.r_[start, js.size])
+        bounds = vessel_starts(js)
+        start, count = bounds[:-1], np.diff(bounds)
         q = np.arange(js.size) - np.repeat(start, count)  # position within its vessel
         new = np.full((start.size, int(count.max())), np.nan)
         new[np.repeat(np.arange(start.size), count), q] = ts
@@ -389,21 +386,20 @@ class LiveFusion:
         and velocity are dropped (as in the batch fusion); at most ``HISTORY`` per vessel
         (the latest)."""
         plane, ok = self._plane(raw)
-        sv = np.r_[self._sv[keep], v]
-        st = np.r_[self._st[keep], t]
-        sa = np.concatenate([self._sa[keep], plane])
+        all_v = np.r_[self._sv[keep], v]
+        all_t = np.r_[self._st[keep], t]
         good = np.r_[np.ones(int(keep.sum()), bool), ok]
-        order = np.lexsort((np.arange(sv.size), st, sv))
-        sv, st = sv[order], st[order]
+        order = np.lexsort((np.arange(all_v.size), all_t, all_v))
+        sv, st = all_v[order], all_t[order]
         last = np.r_[(sv[1:] != sv[:-1]) | (st[1:] != st[:-1]), True]  # of equal (v, t)
         pick = order[last & good[order]]
-        sv, st = np.r_[self._sv[keep], v][pick], np.r_[self._st[keep], t][pick]
+        sv = all_v[pick]
         # at most HISTORY per vessel: rank from each vessel's last state
-        end = np.r_[np.flatnonzero(sv[1:] != sv[:-1]), sv.size - 1] if sv.size else sv
-        size = np.diff(np.r_[-1, end])
-        rank = np.repeat(end, size) - np.arange(sv.size)
-        cap = rank < HISTORY
-        self._sv, self._st, self._sa = sv[cap], st[cap], sa[pick][cap]
+        bounds = vessel_starts(sv)
+        rank = np.repeat(bounds[1:] - 1, np.diff(bounds)) - np.arange(sv.size)
+        cap = pick[rank < HISTORY]
+        self._sv, self._st = all_v[cap], all_t[cap]
+        self._sa = np.concatenate([self._sa[keep], plane])[cap]
 
     def _plane(self, raw: FloatArray) -> tuple[FloatArray, NDArray[np.bool_]]:
         """Raw filter outputs (n, 13) as states in the radar's plane (n, 12): position,
@@ -437,10 +433,16 @@ class LiveFusion:
         keep = ~le | last_le
         self._sv, self._st, self._sa = sv[keep], self._st[keep], self._sa[keep]
 
+    def _vessel_of(self, key: int) -> int | None:
+        """The fusion's vessel id of a key (None: not seen)."""
+        sk, sid = self._sorted_keys
+        p = int(np.searchsorted(sk, key))
+        return int(sid[p]) if p < sk.size and sk[p] == key else None
+
     def states_of(self, key: int) -> dict[float, tuple[float, ...]]:
         """The stored states of a vessel key by time (12 numbers in the radar's plane:
         position, velocity, position and velocity covariances)."""
-        j = self.index.get(key)
+        j = self._vessel_of(key)
         rows = np.flatnonzero(self._sv == j) if j is not None else np.zeros(0, np.int64)
         return {t: tuple(a) for t, a in zip(self._st[rows].tolist(), self._sa[rows].tolist(),
                                             strict=True)}  # fmt: skip
@@ -448,7 +450,7 @@ class LiveFusion:
     def report_times(self, key: int) -> list[float]:
         """The report times of a vessel key the gap limit is taken of (the last
         ``HISTORY``)."""
-        j = self.index.get(key)
+        j = self._vessel_of(key)
         return [] if j is None else [x for x in self._ring[j].tolist() if x == x]
 
     def _step(self, item: _Scan) -> None:

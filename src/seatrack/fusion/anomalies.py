@@ -267,13 +267,6 @@ class RecentIntervals:
             first = times.pop(0)
             self._remove(times[0] - first)
 
-    def rewind(self, t: float) -> None:
-        """Forget the times after ``t`` (a vessel re-run from an earlier report)."""
-        while self.times and self.times[-1] > t:
-            last = self.times.pop()
-            if self.times:
-                self._remove(last - self.times[-1])
-
     def limit(self, gap_factor: float, min_gap_s: float) -> float:
         """``max(gap_factor * median interval, min_gap_s)``; ``min_gap_s`` with fewer
         than two times (:func:`gap_limits`)."""

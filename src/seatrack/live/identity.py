@@ -138,9 +138,7 @@ class LiveIdentities:
         vs = v.tolist()
         out_key = np.empty(n, np.int64)
         for i, (m, row) in enumerate(zip(mmsi.tolist(), rows.tolist(), strict=True)):
-            st = self.mmsis.get(m)
-            if st is None:
-                st = self.mmsis[m] = _Mmsi()
+            st = self._mmsi(m)
             t = row[0]
             p = (xy[i][0], xy[i][1])
             if t < st.latest_t:  # out of order: to the vessel it is nearest, no flags
@@ -179,6 +177,13 @@ class LiveIdentities:
                     self._abandon(m, tr)
 
     # ---- helpers -------------------------------------------------------------------------
+    def _mmsi(self, m: int) -> _Mmsi:
+        """The state of MMSI ``m``, new if it has none."""
+        st = self.mmsis.get(m)
+        if st is None:
+            st = self.mmsis[m] = _Mmsi()
+        return st
+
     def _plane(self, mmsi: NDArray[np.int64], lat: FloatArray, lon: FloatArray) -> FloatArray:
         if self.origin is not None:
             enu = geodetic_to_enu(lat, lon, 0.0, *self.origin)
@@ -186,9 +191,7 @@ class LiveIdentities:
         origin = np.empty((mmsi.size, 2))
         for i, (m, la, lo) in enumerate(zip(mmsi.tolist(), lat.tolist(), lon.tolist(),
                                             strict=True)):  # fmt: skip
-            st = self.mmsis.get(m)
-            if st is None:
-                st = self.mmsis[m] = _Mmsi()
+            st = self._mmsi(m)
             if st.origin is None:
                 st.origin = (la, lo)
             origin[i] = st.origin
@@ -251,7 +254,7 @@ class LiveIdentities:
             np.radians(rows[:, 4]), rows[:, 3] * KNOT_MPS).reshape(-1, 2).tolist()]  # fmt: skip
         for i, key in enumerate(keys):
             m, sub = split_key(key)
-            st = self.mmsis.setdefault(m, _Mmsi())
+            st = self._mmsi(m)
             f = st.follow
             f.t.append(float(t[i]))
             f.xy.append(xy[i])

@@ -237,12 +237,11 @@ def evaluate(
     from seatrack.api.simulate import load
 
     sc = load(scenario)
+    options = EvaluationOptions(methods, runs, seed, sensor, skip, processes)
     if sc.multitarget is None:
-        return run_evaluation(sc, EvaluationOptions(methods, runs, seed, sensor, skip,
-                                                    processes)).frame()  # fmt: skip
+        return run_evaluation(sc, options).frame()
     from seatrack.evaluate.multitarget import evaluate_multitarget
 
-    options = EvaluationOptions(methods, runs, seed, sensor, skip, processes)
     n_mt, s_mt, mt = multitarget_options(sc, options)
     with tempfile.TemporaryDirectory(prefix="seatrack-") as folder:
         out = Path(folder) / "evaluate.csv"
